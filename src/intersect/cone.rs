@@ -1,0 +1,129 @@
+use glam::Vec3;
+
+use crate::ray::Ray;
+
+/// Ray test against the open (uncapped) cone frustum or cylinder from `base` along the unit
+/// `axis` for `height`, with radius `r_base` at the base and `r_apex` at the far end.
+///
+/// A point `P` lies on it when its distance from the axis equals
+/// `r(s) = r_base + k s`, `k = (r_apex - r_base) / height`, with `s = dot(P - base, axis)`
+/// in `[0, height]`: a quadratic in `t`, solved for both roots in order.
+#[allow(clippy::too_many_arguments)] // the cone's five fields, the ray and its interval
+pub fn cone(
+    ray: &Ray,
+    base: Vec3,
+    axis: Vec3,
+    height: f32,
+    r_base: f32,
+    r_apex: f32,
+    t_min: f32,
+    t_max: f32,
+) -> Option<f32> {
+    let slope = (r_apex - r_base) / height;
+    let offset = ray.origin - base;
+    let d_axial = ray.dir.dot(axis);
+    let o_axial = offset.dot(axis);
+    let d_perp = ray.dir - d_axial * axis;
+    let o_perp = offset - o_axial * axis;
+    let r_origin = r_base + slope * o_axial;
+    let a = d_perp.dot(d_perp) - slope * slope * d_axial * d_axial;
+    let half_b = o_perp.dot(d_perp) - slope * d_axial * r_origin;
+    let c = o_perp.dot(o_perp) - r_origin * r_origin;
+
+    let on_surface = |t: f32| {
+        let s = o_axial + t * d_axial;
+        t > t_min && t < t_max && (0.0..=height).contains(&s)
+    };
+    // A ray parallel to the cone's side (or a cylinder's axis) leaves a linear equation.
+    if a.abs() <= 1e-12 * d_perp.dot(d_perp).max(d_axial * d_axial) {
+        if half_b == 0.0 {
+            return None;
+        }
+        let t = -c / (2.0 * half_b);
+        return on_surface(t).then_some(t);
+    }
+    let disc = half_b * half_b - a * c;
+    if !(disc >= 0.0) {
+        return None;
+    }
+    let root = disc.sqrt();
+    let (t0, t1) = ((-half_b - root) / a, (-half_b + root) / a);
+    let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+    if on_surface(near) {
+        Some(near)
+    } else if on_surface(far) {
+        Some(far)
+    } else {
+        None
+    }
+}
+
+/// Outward normal of the cone surface at `p`, the gradient of `|P_perp|^2 - r(s)^2`. At the
+/// apex of a pointed cone the gradient vanishes and the axis is returned.
+pub fn cone_normal(base: Vec3, axis: Vec3, height: f32, r_base: f32, r_apex: f32, p: Vec3) -> Vec3 {
+    let slope = (r_apex - r_base) / height;
+    let offset = p - base;
+    let s = offset.dot(axis);
+    let perp = offset - s * axis;
+    let gradient = perp - (r_base + slope * s) * slope * axis;
+    gradient.try_normalize().unwrap_or(axis)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_cylinder(ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        cone(ray, Vec3::ZERO, Vec3::Z, 2.0, 1.0, 1.0, t_min, t_max)
+    }
+
+    #[test]
+    fn cylinder_from_outside_and_inside() {
+        let outside = Ray::new(Vec3::new(-5., 0., 1.), Vec3::X);
+        assert!((unit_cylinder(&outside, 0.0, 1e9).unwrap() - 4.0).abs() < 1e-5);
+        let inside = Ray::new(Vec3::new(0., 0., 1.), Vec3::X);
+        assert!((unit_cylinder(&inside, 0.0, 1e9).unwrap() - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn cylinder_is_open_and_finite() {
+        let along_axis = Ray::new(Vec3::new(0., 0., -5.), Vec3::Z);
+        assert_eq!(unit_cylinder(&along_axis, 0.0, 1e9), None);
+        let above = Ray::new(Vec3::new(-5., 0., 2.5), Vec3::X);
+        assert_eq!(unit_cylinder(&above, 0.0, 1e9), None);
+        // Through the open top and out of the side wall.
+        let slanted = Ray::new(Vec3::new(0., 0., 3.), Vec3::new(1., 0., -1.).normalize());
+        let t = unit_cylinder(&slanted, 0.0, 1e9).unwrap();
+        let p = slanted.at(t);
+        assert!((p.x - 1.0).abs() < 1e-5 && (p.z - 2.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn cone_apex_and_side() {
+        // Pointed cone: radius 1 at z = 0, apex at z = 1.
+        let (base, axis) = (Vec3::ZERO, Vec3::Z);
+        let through_apex = Ray::new(Vec3::new(-1., 0., 1.), Vec3::X);
+        let t = cone(&through_apex, base, axis, 1.0, 1.0, 0.0, 0.0, 1e9).unwrap();
+        assert!((t - 1.0).abs() < 1e-4);
+        assert_eq!(
+            cone_normal(base, axis, 1.0, 1.0, 0.0, through_apex.at(t)),
+            axis
+        );
+        // Halfway up the side the radius is 0.5 and the normal leans up at 45 degrees.
+        let side = Ray::new(Vec3::new(-5., 0., 0.5), Vec3::X);
+        let t = cone(&side, base, axis, 1.0, 1.0, 0.0, 0.0, 1e9).unwrap();
+        assert!((t - 4.5).abs() < 1e-5);
+        let n = cone_normal(base, axis, 1.0, 1.0, 0.0, side.at(t));
+        assert!((n - Vec3::new(-1., 0., 1.).normalize()).length() < 1e-5);
+    }
+
+    #[test]
+    fn ray_parallel_to_the_side_hits_once() {
+        // The side of this cone runs at 45 degrees; a ray along that slope crosses the
+        // surface once, where the quadratic term vanishes.
+        let ray = Ray::new(Vec3::new(-0.5, 0., 0.), Vec3::new(1., 0., 1.).normalize());
+        let t = cone(&ray, Vec3::ZERO, Vec3::Z, 1.0, 1.0, 0.0, 0.0, 1e9).unwrap();
+        let p = ray.at(t);
+        assert!((p.x.hypot(p.y) - (1.0 - p.z)).abs() < 1e-5);
+    }
+}

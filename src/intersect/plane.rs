@@ -1,0 +1,43 @@
+use glam::Vec3;
+
+use crate::ray::Ray;
+
+/// Ray-plane test for the plane `dot(normal, p) = offset`. A ray parallel to the plane
+/// (including one lying in it) misses.
+pub fn plane(ray: &Ray, normal: Vec3, offset: f32, t_min: f32, t_max: f32) -> Option<f32> {
+    let denom = normal.dot(ray.dir);
+    if denom == 0.0 {
+        return None;
+    }
+    let t = (offset - normal.dot(ray.origin)) / denom;
+    (t > t_min && t < t_max).then_some(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hits_from_both_sides() {
+        let down = Ray::new(Vec3::new(3., 2., 7.), Vec3::NEG_Z);
+        assert_eq!(plane(&down, Vec3::Z, -0.5, 0.0, f32::INFINITY), Some(7.5));
+        let up = Ray::new(Vec3::new(3., 2., -7.), Vec3::Z);
+        assert_eq!(plane(&up, Vec3::Z, -0.5, 0.0, f32::INFINITY), Some(6.5));
+    }
+
+    #[test]
+    fn parallel_and_in_plane_rays_miss() {
+        let parallel = Ray::new(Vec3::new(0., 0., 1.), Vec3::X);
+        assert_eq!(plane(&parallel, Vec3::Z, 0.0, 0.0, f32::INFINITY), None);
+        let inside = Ray::new(Vec3::ZERO, Vec3::X);
+        assert_eq!(plane(&inside, Vec3::Z, 0.0, 0.0, f32::INFINITY), None);
+    }
+
+    #[test]
+    fn behind_and_beyond_miss() {
+        let away = Ray::new(Vec3::new(0., 0., 1.), Vec3::Z);
+        assert_eq!(plane(&away, Vec3::Z, 0.0, 0.0, f32::INFINITY), None);
+        let down = Ray::new(Vec3::new(0., 0., 1.), Vec3::NEG_Z);
+        assert_eq!(plane(&down, Vec3::Z, 0.0, 0.0, 0.5), None);
+    }
+}

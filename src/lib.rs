@@ -1,0 +1,22 @@
+//! p3trace: a data-oriented ray tracer for the P3F scenes of the P3D course.
+//!
+//! The map of the crate is in `ARCHITECTURE.md`; the scene format and the shading it must
+//! compute are specified in the course's `P3F.md`. In short:
+//!
+//! - [`scene`] reads P3F files into a [`scene::Scene`] whose primitives are stored
+//!   structure-of-arrays ([`scene::geometry`]).
+//! - [`intersect`] holds the scalar ray-primitive tests, the reference for everything faster.
+//! - [`accel`] finds closest hits and answers occlusion queries over a scene.
+//! - [`render`] turns a scene into an image: camera, Whitted shading, skybox, tiles, film.
+//! - [`compare`] measures how two images differ.
+
+// Tests like `!(x > 0.0)` are deliberate: they must also reject NaN, which `x <= 0.0` lets
+// through.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod accel;
+pub mod compare;
+pub mod intersect;
+pub mod ray;
+pub mod render;
+pub mod scene;

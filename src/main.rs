@@ -1,0 +1,174 @@
+//! The `p3trace` command: parses the command line, calls the library, and maps failures
+//! to exit codes (1 a render or I/O failure, 2 bad usage or a bad scene).
+
+mod cli;
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::Parser;
+
+use cli::{Cli, Command, CompareArgs, RenderArgs};
+use p3trace::ray::PrimKind;
+use p3trace::render::film::OutputFormat;
+use p3trace::render::{self, RenderOptions, Sampling};
+use p3trace::scene::{self, Light, Scene};
+
+/// Why the command failed, and so which exit code it gives.
+enum Failure {
+    /// Bad usage or a bad scene: exit 2.
+    Usage(String),
+    /// A render or I/O failure: exit 1.
+    Run(String),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => run_render(&args),
+        Command::Info { scene } => run_info(&scene),
+        Command::Compare(args) => run_compare(&args),
+    };
+    match result {
+        Ok(code) => code,
+        Err(Failure::Usage(message)) => {
+            eprintln!("p3trace: error: {message}");
+            ExitCode::from(2)
+        }
+        Err(Failure::Run(message)) => {
+            eprintln!("p3trace: error: {message}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn load_scene(path: &Path) -> Result<Scene, Failure> {
+    let scene = scene::parse_file(path).map_err(|e| Failure::Usage(e.to_string()))?;
+    for w in &scene.warnings {
+        eprintln!(
+            "{}:{}:{}: warning: {}",
+            scene.name, w.line, w.column, w.message
+        );
+    }
+    if !scene.has_camera {
+        return Err(Failure::Usage(format!(
+            "{}: the scene has no camera block 'v'",
+            scene.name
+        )));
+    }
+    Ok(scene)
+}
+
+fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
+    let output = args.output.clone().unwrap_or_else(|| {
+        let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy();
+        PathBuf::from(format!("{stem}.png"))
+    });
+    // Refuse a bad output name before spending time on the render.
+    OutputFormat::from_path(&output).map_err(Failure::Usage)?;
+    let scene = load_scene(&args.scene)?;
+
+    let mut options = RenderOptions::from_scene(&scene);
+    if let Some((w, h)) = args.resolution {
+        (options.width, options.height) = (w, h);
+    }
+    if let Some(n) = args.spp {
+        options.sampling = Sampling::from_samples_per_pixel(n).map_err(Failure::Usage)?;
+    }
+    options.shade.max_depth = args.max_depth;
+    options.shade.schlick = args.schlick;
+    options.skybox = !args.no_skybox;
+    options.threads = args.threads.map(|n| n as usize);
+    options.seed = args.seed;
+    options.progress = !args.quiet && std::io::stderr().is_terminal();
+
+    let report = render::render(&scene, &options).map_err(Failure::Run)?;
+    for w in &report.warnings {
+        eprintln!("p3trace: warning: {w}");
+    }
+    report.film.write(&output).map_err(Failure::Run)?;
+    if !args.quiet {
+        let seconds = report.elapsed.as_secs_f64();
+        println!(
+            "{}: {}x{}, {} spp, {:.3} s, {:.2} M rays, {:.2} Mrays/s -> {}",
+            scene.name,
+            options.width,
+            options.height,
+            options.sampling.samples_per_pixel(),
+            seconds,
+            report.rays as f64 / 1e6,
+            report.rays as f64 / 1e6 / seconds.max(1e-9),
+            output.display()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_info(path: &Path) -> Result<ExitCode, Failure> {
+    let scene = load_scene(path)?;
+    let g = &scene.geometry;
+    println!("scene: {}", scene.name);
+    let total: usize = PrimKind::ALL.iter().map(|&k| g.count(k)).sum();
+    println!("objects: {total}");
+    for kind in PrimKind::ALL {
+        println!("  {:<20} {}", kind.name(), g.count(kind));
+    }
+    if scene.meshes > 0 {
+        println!(
+            "  ({} triangles from {} meshes)",
+            scene.mesh_triangles, scene.meshes
+        );
+    }
+    let smooth = g.triangles.vertex_normals.len();
+    if smooth > 0 {
+        println!("  ({smooth} triangles have vertex normals)");
+    }
+    println!("materials: {}", scene.materials.len());
+    let area = scene
+        .lights
+        .iter()
+        .filter(|l| matches!(l, Light::Area { .. }))
+        .count();
+    println!("lights: {} point, {} area", scene.lights.len() - area, area);
+    let c = &scene.camera;
+    println!(
+        "camera: from {} at {} up {}, angle {}, {}x{}, hither {}, aperture {}, focal {}",
+        c.from, c.at, c.up, c.angle, c.width, c.height, c.hither, c.aperture, c.focal
+    );
+    println!("background: {}", scene.background);
+    match &scene.skybox {
+        Some(dir) if dir.is_dir() => println!("skybox: {}", dir.display()),
+        Some(dir) => println!(
+            "skybox: {} (missing: the background colour is used)",
+            dir.display()
+        ),
+        None => println!("skybox: none"),
+    }
+    let accel = scene
+        .accel
+        .map_or("not set".to_string(), |a| format!("{a:?}").to_lowercase());
+    println!("accel (file): {accel}");
+    println!("spp (file): {}", scene.spp);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
+    let a = p3trace::compare::load(&args.first).map_err(Failure::Usage)?;
+    let b = p3trace::compare::load(&args.second).map_err(Failure::Usage)?;
+    let c = p3trace::compare::compare(&a, &b, args.tolerance).map_err(Failure::Usage)?;
+    let share = 100.0 * c.within_tolerance;
+    println!("size: {}x{}", c.width, c.height);
+    println!("psnr: {:.2} dB", c.psnr);
+    println!("max channel difference: {} levels", c.max_difference);
+    println!("pixels within {} levels: {share:.3}%", args.tolerance);
+    if share + 1e-9 < args.min_match {
+        println!(
+            "differ: fewer than {}% of pixels within the tolerance",
+            args.min_match
+        );
+        return Ok(ExitCode::from(1));
+    }
+    println!("match");
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,95 @@
+//! Rays and hit records shared by the intersection routines, accelerators and shader.
+
+use glam::Vec3;
+
+/// A ray `origin + t * dir`. `dir` is unit length wherever the renderer makes rays: the
+/// intersection routines rely on it (the sphere test skips the `dot(d, d)` term).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+    /// Shutter time at which moving geometry is seen (0 without motion blur).
+    pub time: f32,
+}
+
+impl Ray {
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Ray {
+            origin,
+            dir,
+            time: 0.0,
+        }
+    }
+
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + t * self.dir
+    }
+}
+
+/// Which array of [`crate::scene::geometry::Geometry`] a primitive lives in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[repr(u8)]
+pub enum PrimKind {
+    Sphere = 0,
+    MovingSphere = 1,
+    Triangle = 2,
+    Box = 3,
+    Cone = 4,
+    Plane = 5,
+}
+
+impl PrimKind {
+    pub const ALL: [PrimKind; 6] = [
+        PrimKind::Sphere,
+        PrimKind::MovingSphere,
+        PrimKind::Triangle,
+        PrimKind::Box,
+        PrimKind::Cone,
+        PrimKind::Plane,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            PrimKind::Sphere => "spheres",
+            PrimKind::MovingSphere => "moving spheres",
+            PrimKind::Triangle => "triangles",
+            PrimKind::Box => "boxes",
+            PrimKind::Cone => "cones and cylinders",
+            PrimKind::Plane => "planes",
+        }
+    }
+}
+
+/// A primitive's kind and its index in that kind's arrays, packed in 32 bits so that hit
+/// records and BVH leaves stay small: the kind takes the top 3 bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct PrimId(u32);
+
+impl PrimId {
+    const INDEX_BITS: u32 = 29;
+    /// The largest number of primitives of one kind.
+    pub const MAX_INDEX: u32 = (1 << Self::INDEX_BITS) - 1;
+
+    pub fn new(kind: PrimKind, index: u32) -> Self {
+        debug_assert!(index <= Self::MAX_INDEX);
+        PrimId(((kind as u32) << Self::INDEX_BITS) | index)
+    }
+
+    pub fn kind(self) -> PrimKind {
+        PrimKind::ALL[(self.0 >> Self::INDEX_BITS) as usize]
+    }
+
+    pub fn index(self) -> usize {
+        (self.0 & Self::MAX_INDEX) as usize
+    }
+}
+
+/// The closest hit found along a ray: its distance, the primitive, and the barycentric
+/// coordinates `(u, v)` of the hit for triangles (zero for other kinds).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    pub prim: PrimId,
+    pub u: f32,
+    pub v: f32,
+}

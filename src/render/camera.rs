@@ -1,0 +1,134 @@
+//! The P3F camera (P3F.md section 3): a pinhole, or a thin lens when `aperture > 0`.
+
+use glam::{Vec2, Vec3};
+
+use crate::ray::Ray;
+use crate::scene::CameraSpec;
+
+#[derive(Clone, Copy, Debug)]
+pub struct Camera {
+    eye: Vec3,
+    /// The camera frame: `u` right, `v` up, `n` backwards (the camera looks along `-n`).
+    u: Vec3,
+    v: Vec3,
+    n: Vec3,
+    /// Distance from the eye to the view plane, which passes through `at`.
+    plane_distance: f32,
+    /// Size of the view plane in world units.
+    plane_width: f32,
+    plane_height: f32,
+    width: f32,
+    height: f32,
+    lens_radius: f32,
+    focal: f32,
+}
+
+impl Camera {
+    /// A camera for an image of `width` x `height` pixels. `spec` must have passed
+    /// [`CameraSpec::validate`].
+    pub fn new(spec: &CameraSpec, width: u32, height: u32) -> Self {
+        let n = (spec.from - spec.at).normalize();
+        let plane_distance = (spec.from - spec.at).length();
+        let u = spec.up.cross(n).normalize();
+        let v = n.cross(u);
+        let plane_height = 2.0 * plane_distance * (spec.angle.to_radians() / 2.0).tan();
+        let plane_width = plane_height * width as f32 / height as f32;
+        Camera {
+            eye: spec.from,
+            u,
+            v,
+            n,
+            plane_distance,
+            plane_width,
+            plane_height,
+            width: width as f32,
+            height: height as f32,
+            lens_radius: spec.aperture * plane_width / width as f32,
+            focal: spec.focal,
+        }
+    }
+
+    pub fn is_thin_lens(&self) -> bool {
+        self.lens_radius > 0.0
+    }
+
+    /// The primary ray through film position `(sx, sy)` in pixel units, `(0, 0)` being the
+    /// bottom-left corner. `lens` is a point of the unit disk, used only by a thin lens.
+    pub fn ray(&self, sx: f32, sy: f32, lens: Vec2, time: f32) -> Ray {
+        let x = self.plane_width * (sx / self.width - 0.5);
+        let y = self.plane_height * (sy / self.height - 0.5);
+        let mut ray = if self.is_thin_lens() {
+            let l = lens * self.lens_radius;
+            let (px, py) = (x * self.focal, y * self.focal);
+            let dir = self.u * (px - l.x) + self.v * (py - l.y)
+                - self.n * (self.focal * self.plane_distance);
+            Ray::new(self.eye + self.u * l.x + self.v * l.y, dir.normalize())
+        } else {
+            let dir = self.u * x + self.v * y - self.n * self.plane_distance;
+            Ray::new(self.eye, dir.normalize())
+        };
+        ray.time = time;
+        ray
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec() -> CameraSpec {
+        CameraSpec {
+            from: Vec3::new(0., 0., 10.),
+            at: Vec3::ZERO,
+            up: Vec3::Y,
+            angle: 90.0,
+            width: 200,
+            height: 100,
+            ..CameraSpec::default()
+        }
+    }
+
+    #[test]
+    fn centre_ray_looks_at_the_target() {
+        let cam = Camera::new(&spec(), 200, 100);
+        let r = cam.ray(100.0, 50.0, Vec2::ZERO, 0.0);
+        assert!((r.dir - Vec3::NEG_Z).length() < 1e-6);
+        assert_eq!(r.origin, Vec3::new(0., 0., 10.));
+    }
+
+    #[test]
+    fn corners_span_the_field_of_view() {
+        // 90 degrees vertically at distance 10: the view plane is 20 high and 40 wide.
+        let cam = Camera::new(&spec(), 200, 100);
+        let top_right = cam.ray(200.0, 100.0, Vec2::ZERO, 0.0);
+        let expected = Vec3::new(20., 10., -10.).normalize();
+        assert!((top_right.dir - expected).length() < 1e-6);
+        let bottom_left = cam.ray(0.0, 0.0, Vec2::ZERO, 0.0);
+        assert!((bottom_left.dir - Vec3::new(-20., -10., -10.).normalize()).length() < 1e-6);
+    }
+
+    #[test]
+    fn thin_lens_rays_meet_on_the_focal_plane() {
+        let s = CameraSpec {
+            aperture: 4.0,
+            focal: 1.5,
+            ..spec()
+        };
+        let cam = Camera::new(&s, 200, 100);
+        assert!(cam.is_thin_lens());
+        let (sx, sy) = (37.0, 81.0);
+        let points: Vec<Vec3> = [Vec2::ZERO, Vec2::new(1., 0.), Vec2::new(-0.3, 0.8)]
+            .iter()
+            .map(|&l| {
+                let r = cam.ray(sx, sy, l, 0.0);
+                // The focal plane is z = 10 - 1.5 * 10.
+                r.at((-5.0 - r.origin.z) / r.dir.z)
+            })
+            .collect();
+        assert!((points[0] - points[1]).length() < 1e-4);
+        assert!((points[0] - points[2]).length() < 1e-4);
+        // The lens is aperture pixel widths wide: 4 * 40 / 200 = 0.8.
+        let edge = cam.ray(sx, sy, Vec2::new(1., 0.), 0.0);
+        assert!((edge.origin - Vec3::new(0.8, 0., 10.)).length() < 1e-5);
+    }
+}

@@ -1,0 +1,140 @@
+//! The cube-map skybox of `env DIR` (P3F.md section 10): six faces, nearest texel.
+
+use std::path::Path;
+
+use glam::Vec3;
+
+/// Face files in the order of [`Face`].
+const FACE_NAMES: [&str; 6] = ["right", "left", "top", "bottom", "front", "back"];
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Face {
+    Right = 0,
+    Left = 1,
+    Top = 2,
+    Bottom = 3,
+    Front = 4,
+    Back = 5,
+}
+
+#[derive(Clone, Debug)]
+struct FaceImage {
+    width: u32,
+    height: u32,
+    /// RGB bytes, top row first (as stored in the file).
+    rgb: Vec<u8>,
+}
+
+#[derive(Clone, Debug)]
+pub struct Skybox {
+    faces: Vec<FaceImage>,
+}
+
+impl Skybox {
+    /// Loads `DIR/{right,left,top,bottom,front,back}.jpg` (or `.png`).
+    pub fn load(dir: &Path) -> Result<Skybox, String> {
+        let faces = FACE_NAMES
+            .iter()
+            .map(|name| {
+                let path = ["jpg", "jpeg", "png"]
+                    .iter()
+                    .map(|ext| dir.join(format!("{name}.{ext}")))
+                    .find(|p| p.is_file())
+                    .ok_or_else(|| format!("no {name}.jpg or {name}.png in {}", dir.display()))?;
+                let image = image::open(&path)
+                    .map_err(|e| format!("cannot read {}: {e}", path.display()))?
+                    .into_rgb8();
+                Ok(FaceImage {
+                    width: image.width(),
+                    height: image.height(),
+                    rgb: image.into_raw(),
+                })
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        Ok(Skybox { faces })
+    }
+
+    /// The colour seen in direction `d` (need not be unit length).
+    pub fn lookup(&self, d: Vec3) -> Vec3 {
+        let (face, sc, tc, m) = face_coordinates(d);
+        let image = &self.faces[face as usize];
+        let s = (sc / m + 1.0) / 2.0;
+        let t = (tc / m + 1.0) / 2.0;
+        let column = nearest(s, image.width);
+        let row_from_bottom = nearest(t, image.height);
+        let row = (image.height - 1 - row_from_bottom) as usize;
+        let i = 3 * (row * image.width as usize + column as usize);
+        Vec3::new(
+            image.rgb[i] as f32,
+            image.rgb[i + 1] as f32,
+            image.rgb[i + 2] as f32,
+        ) / 255.99
+    }
+}
+
+/// Index of the texel nearest to `s` in `[0, 1]` along a side of `size` texels.
+fn nearest(s: f32, size: u32) -> u32 {
+    let x = ((size - 1) as f32 * s).round();
+    (x.max(0.0) as u32).min(size - 1)
+}
+
+/// The face a direction falls on, its `(sc, tc)` and the magnitude of its largest component
+/// (the table of P3F.md section 10: between x and y a tie goes to y, z only wins strictly).
+fn face_coordinates(d: Vec3) -> (Face, f32, f32, f32) {
+    let a = d.abs();
+    if a.z > a.x && a.z > a.y {
+        if d.z > 0.0 {
+            (Face::Front, -d.x, d.y, a.z)
+        } else {
+            (Face::Back, d.x, d.y, a.z)
+        }
+    } else if a.y >= a.x {
+        if d.y > 0.0 {
+            (Face::Top, -d.x, -d.z, a.y)
+        } else {
+            (Face::Bottom, -d.x, d.z, a.y)
+        }
+    } else if d.x > 0.0 {
+        (Face::Left, d.z, d.y, a.x)
+    } else {
+        (Face::Right, -d.z, d.y, a.x)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn faces_follow_the_table() {
+        assert_eq!(face_coordinates(Vec3::X).0, Face::Left);
+        assert_eq!(face_coordinates(Vec3::NEG_X).0, Face::Right);
+        assert_eq!(face_coordinates(Vec3::Y).0, Face::Top);
+        assert_eq!(face_coordinates(Vec3::NEG_Y).0, Face::Bottom);
+        assert_eq!(face_coordinates(Vec3::Z).0, Face::Front);
+        assert_eq!(face_coordinates(Vec3::NEG_Z).0, Face::Back);
+        // Ties: y beats x; z must be strictly largest.
+        assert_eq!(face_coordinates(Vec3::new(1., 1., 0.)).0, Face::Top);
+        assert_eq!(face_coordinates(Vec3::new(1., 0., 1.)).0, Face::Left);
+        assert_eq!(face_coordinates(Vec3::new(0., -1., 1.)).0, Face::Bottom);
+    }
+
+    #[test]
+    fn lookup_reads_the_nearest_texel_bottom_row_first() {
+        // A 2 x 2 face whose bottom-left texel is red and the rest black.
+        let mut rgb = vec![0u8; 12];
+        rgb[6] = 255; // row 1 (the bottom row), column 0
+        let face = FaceImage {
+            width: 2,
+            height: 2,
+            rgb,
+        };
+        let sky = Skybox {
+            faces: vec![face; 6],
+        };
+        // Back face: (sc, tc) = (x, y); s = t = 0 at the direction (-1, -1, -1).
+        let c = sky.lookup(Vec3::new(-0.9, -0.9, -1.0));
+        assert_eq!(c, Vec3::new(255.0 / 255.99, 0.0, 0.0));
+        assert_eq!(sky.lookup(Vec3::new(0.9, 0.9, -1.0)), Vec3::ZERO);
+    }
+}

@@ -1,0 +1,185 @@
+//! The command line: exit codes, messages, and what each subcommand prints.
+
+mod common;
+
+use common::{p3trace, scratch, stderr, stdout};
+
+fn showcase() -> String {
+    common::project_file("scenes/showcase.p3f")
+        .display()
+        .to_string()
+}
+
+#[test]
+fn help_explains_every_flag() {
+    let out = p3trace(&["render", "--help"]);
+    assert!(out.status.success());
+    let help = stdout(&out);
+    for flag in [
+        "--output",
+        "--resolution",
+        "--spp",
+        "--max-depth",
+        "--schlick",
+        "--no-skybox",
+        "--threads",
+        "--seed",
+        "--quiet",
+    ] {
+        assert!(help.contains(flag), "render --help does not mention {flag}");
+    }
+    let top = stdout(&p3trace(&["--help"]));
+    for command in ["render", "info", "compare"] {
+        assert!(top.contains(command));
+    }
+}
+
+#[test]
+fn renders_png_ppm_and_hdr_with_statistics() {
+    let dir = scratch("cli_formats");
+    for ext in ["png", "ppm", "hdr"] {
+        let path = dir.join(format!("out.{ext}"));
+        let out = p3trace(&[
+            "render",
+            &showcase(),
+            "-o",
+            path.to_str().unwrap(),
+            "--resolution",
+            "32x24",
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        assert!(stdout(&out).contains("Mrays/s"), "{}", stdout(&out));
+        let image = image::open(&path).unwrap();
+        assert_eq!((image.width(), image.height()), (32, 24));
+    }
+    // PNG and PPM hold the same bytes, and no partial file is left behind.
+    let png = image::open(dir.join("out.png")).unwrap().into_rgb8();
+    let ppm = image::open(dir.join("out.ppm")).unwrap().into_rgb8();
+    assert_eq!(png, ppm);
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .contains("partial")
+        })
+        .collect();
+    assert!(leftovers.is_empty());
+}
+
+#[test]
+fn bad_usage_and_bad_scenes_exit_2_with_a_message() {
+    let dir = scratch("cli_errors");
+    let bad = dir.join("bad.p3f");
+    std::fs::write(
+        &bad,
+        "v from 0 0 5 at 0 0 0 up 0 1 0 angle 45\ns 0 0 0 one\n",
+    )
+    .unwrap();
+    let cases: Vec<Vec<String>> = vec![
+        vec!["render".into(), bad.display().to_string()],
+        vec!["render".into(), showcase(), "--spp".into(), "3".into()],
+        vec![
+            "render".into(),
+            showcase(),
+            "--resolution".into(),
+            "10".into(),
+        ],
+        vec!["render".into(), showcase(), "--threads".into(), "0".into()],
+        vec!["render".into(), showcase(), "--bogus".into()],
+        vec!["render".into(), showcase(), "-o".into(), "x.gif".into()],
+        vec![
+            "render".into(),
+            dir.join("missing.p3f").display().to_string(),
+        ],
+        vec!["info".into(), bad.display().to_string()],
+    ];
+    for args in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = p3trace(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(!stderr(&out).is_empty(), "{args:?} gave no message");
+        assert!(!stderr(&out).contains("panicked"), "{args:?}");
+    }
+    let message = stderr(&p3trace(&["render", bad.to_str().unwrap()]));
+    assert!(
+        message.contains(&format!("{}:2:9: in 's'", bad.display())),
+        "{message}"
+    );
+}
+
+#[test]
+fn unwritable_output_exits_1() {
+    let out = p3trace(&[
+        "render",
+        &showcase(),
+        "--resolution",
+        "8x8",
+        "-o",
+        "/nonexistent-dir/x.png",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("cannot write"));
+}
+
+#[test]
+fn info_lists_objects_lights_and_camera() {
+    let out = p3trace(&["info", &showcase()]);
+    assert!(out.status.success());
+    let text = stdout(&out);
+    for line in [
+        "spheres              2",
+        "planes               1",
+        "cones and cylinders  2",
+        "boxes                1",
+        "lights: 2 point, 1 area",
+        "640x480",
+    ] {
+        assert!(text.contains(line), "missing '{line}' in:\n{text}");
+    }
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let dragon = stdout(&p3trace(&[
+        "info",
+        shared.join("scenes/dragon.p3f").to_str().unwrap(),
+    ]));
+    assert!(
+        dragon.contains("(100000 triangles from 1 meshes)"),
+        "{dragon}"
+    );
+}
+
+#[test]
+fn compare_reports_and_exits_by_tolerance() {
+    let dir = scratch("cli_compare");
+    let (a, b) = (dir.join("a.png"), dir.join("b.png"));
+    image::RgbImage::from_fn(4, 4, |x, _| image::Rgb([10 * x as u8, 0, 0]))
+        .save(&a)
+        .unwrap();
+    image::RgbImage::from_fn(4, 4, |x, y| {
+        image::Rgb([10 * x as u8 + (x == 0 && y == 0) as u8 * 3, 0, 0])
+    })
+    .save(&b)
+    .unwrap();
+    let (a, b) = (a.to_str().unwrap(), b.to_str().unwrap());
+    let same = p3trace(&["compare", a, a]);
+    assert!(same.status.success());
+    assert!(stdout(&same).contains("psnr: inf"), "{}", stdout(&same));
+    let strict = p3trace(&["compare", a, b]);
+    assert_eq!(strict.status.code(), Some(1));
+    assert!(
+        stdout(&strict).contains("max channel difference: 3 levels"),
+        "{}",
+        stdout(&strict)
+    );
+    assert!(stdout(&strict).contains("93.750%"), "{}", stdout(&strict));
+    assert!(p3trace(&["compare", a, b, "--tolerance", "3"])
+        .status
+        .success());
+    assert!(p3trace(&["compare", a, b, "--min-match", "90"])
+        .status
+        .success());
+}

@@ -1,0 +1,50 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+/// The course material beside the project (`../shared`), or `P3TRACE_SHARED` when set.
+/// Tests that need it print why they skip when it is absent.
+pub fn shared() -> Option<PathBuf> {
+    let dir = std::env::var_os("P3TRACE_SHARED")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"));
+    if dir.join("scenes").is_dir() {
+        Some(dir)
+    } else {
+        eprintln!(
+            "skipped: the course material is not at {} (set P3TRACE_SHARED)",
+            dir.display()
+        );
+        None
+    }
+}
+
+pub fn project_file(path: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(path)
+}
+
+/// Runs the `p3trace` binary with `args`.
+pub fn p3trace(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_p3trace"))
+        .args(args)
+        .output()
+        .expect("the p3trace binary runs")
+}
+
+pub fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+pub fn stdout(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+/// A fresh scratch folder under the target directory.
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}

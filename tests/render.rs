@@ -1,0 +1,238 @@
+//! Whole renders: determinism across threads, pixels against the formulas of P3F.md, and
+//! fidelity against the course's reference images.
+
+mod common;
+
+use std::path::Path;
+
+use glam::Vec3;
+use p3trace::compare;
+use p3trace::render::film::{to_byte, Film};
+use p3trace::render::shade::EPS;
+use p3trace::render::{render, RenderOptions, Sampling};
+use p3trace::scene::{parse_file, Scene};
+
+fn render_scene(scene: &Scene, configure: impl FnOnce(&mut RenderOptions)) -> Film {
+    let mut options = RenderOptions::from_scene(scene);
+    options.skybox = false;
+    configure(&mut options);
+    render(scene, &options).expect("the render runs").film
+}
+
+#[test]
+fn output_is_identical_for_one_and_two_threads() {
+    let scene = parse_file(&common::project_file("scenes/showcase.p3f")).unwrap();
+    let films: Vec<Film> = [1, 2]
+        .iter()
+        .map(|&threads| {
+            render_scene(&scene, |o| {
+                (o.width, o.height) = (97, 61);
+                o.sampling = Sampling::Jittered(2);
+                o.threads = Some(threads);
+            })
+        })
+        .collect();
+    assert_eq!(films[0].to_rgb8(), films[1].to_rgb8());
+
+    // And through the command line, comparing the written files byte for byte.
+    let dir = common::scratch("render_threads");
+    let mut files = Vec::new();
+    for threads in ["1", "2"] {
+        let out = dir.join(format!("t{threads}.png"));
+        let scene = common::project_file("scenes/showcase.p3f");
+        let run = common::p3trace(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--resolution",
+            "80x60",
+            "--spp",
+            "4",
+            "--threads",
+            threads,
+        ]);
+        assert!(run.status.success(), "{}", common::stderr(&run));
+        files.push(std::fs::read(&out).unwrap());
+    }
+    assert_eq!(files[0], files[1]);
+}
+
+/// The primary ray of P3F.md section 3, written out again independently of the renderer.
+fn camera_ray(scene: &Scene, width: u32, height: u32, x: u32, row: u32) -> (Vec3, Vec3) {
+    let c = &scene.camera;
+    let n = (c.from - c.at).normalize();
+    let d = (c.from - c.at).length();
+    let u = c.up.cross(n).normalize();
+    let v = n.cross(u);
+    let h = 2.0 * d * (c.angle.to_radians() / 2.0).tan();
+    let w = h * width as f32 / height as f32;
+    let (sx, sy) = (x as f32 + 0.5, (height - 1 - row) as f32 + 0.5);
+    let dir = u * w * (sx / width as f32 - 0.5) + v * h * (sy / height as f32 - 0.5) - n * d;
+    (c.from, dir.normalize())
+}
+
+fn blocked_by_a_sphere(scene: &Scene, origin: Vec3, target: Vec3) -> bool {
+    let s = &scene.geometry.spheres;
+    (0..s.radius.len()).any(|i| {
+        // Distance from the centre to the segment origin-target, against the radius.
+        let (c, r) = (s.centre.get(i), s.radius[i]);
+        let seg = target - origin;
+        let k = ((c - origin).dot(seg) / seg.length_squared()).clamp(0.0, 1.0);
+        (origin + k * seg - c).length() < r
+    })
+}
+
+/// The colour of the balls' floor (z = -0.5, normal +z, Ks = 0) at the pixel, from the
+/// formulas: the sum over unshadowed lights of Cd Kd max(0, N.L), clamped, as bytes.
+fn expected_floor_pixel(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    x: u32,
+    row: u32,
+) -> Option<[u8; 3]> {
+    let (o, d) = camera_ray(scene, width, height, x, row);
+    let t = (-0.5 - o.z) / d.z;
+    let p = o + t * d;
+    if !(t > 0.0 && p.x.abs() < 12.0 && p.y.abs() < 12.0) || blocked_by_a_sphere(scene, o, p) {
+        return None;
+    }
+    let floor = scene.materials[0];
+    let mut colour = Vec3::ZERO;
+    for light in &scene.lights {
+        let p3trace::scene::Light::Point {
+            position,
+            colour: lc,
+        } = *light
+        else {
+            unreachable!()
+        };
+        let l = (position - p).normalize();
+        if l.z > 0.0 && !blocked_by_a_sphere(scene, p + EPS * Vec3::Z, position) {
+            colour += lc * floor.diffuse * floor.kd * l.z;
+        }
+    }
+    Some(colour.clamp(Vec3::ZERO, Vec3::ONE).to_array().map(to_byte))
+}
+
+fn pixel(film: &Film, x: u32, row: u32) -> [u8; 3] {
+    film.get(x, row).to_array().map(to_byte)
+}
+
+#[test]
+fn balls_low_background_and_floor_follow_the_formulas() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let scene = parse_file(&shared.join("refs/scenes/balls_low.p3f")).unwrap();
+    let reference = compare::load(&shared.join("refs/balls_low.png")).unwrap();
+
+    let film = render_scene(&scene, |_| {});
+    let mut checked = 0;
+    for (x, row) in [
+        (60, 480),
+        (20, 20),
+        (300, 440),
+        (150, 330),
+        (420, 120),
+        (256, 470),
+        (500, 300),
+    ] {
+        let Some(expected) = expected_floor_pixel(&scene, 512, 512, x, row) else {
+            continue;
+        };
+        assert_eq!(pixel(&film, x, row), expected, "floor pixel ({x}, {row})");
+        let i = 3 * (row * 512 + x) as usize;
+        let from_reference = [0, 1, 2].map(|c| reference.rgb[i + c] as u8);
+        assert_eq!(
+            from_reference, expected,
+            "reference floor pixel ({x}, {row})"
+        );
+        checked += 1;
+    }
+    assert!(
+        checked >= 4,
+        "only {checked} floor pixels were unobstructed"
+    );
+
+    // The square floor ends at +-12: a wider image shows the background in its top corners.
+    let wide = render_scene(&scene, |o| (o.width, o.height) = (1536, 512));
+    let (o, d) = camera_ray(&scene, 1536, 512, 0, 0);
+    let floor_hit = o + d * ((-0.5 - o.z) / d.z);
+    assert!(floor_hit.x.abs() > 12.0 || floor_hit.y.abs() > 12.0);
+    let bclr = scene.background.to_array().map(to_byte);
+    assert_eq!(bclr, [19, 92, 192]);
+    assert_eq!(pixel(&wide, 0, 0), bclr);
+    assert_eq!(pixel(&wide, 1535, 0), bclr);
+}
+
+/// Renders a course scene as the references were made (one sample at the pixel centre,
+/// no skybox) and returns the share of pixels within 2 levels of the reference.
+fn share_within_two_levels(scene_path: &Path, reference: &Path) -> f64 {
+    let scene = parse_file(scene_path).unwrap();
+    let film = render_scene(&scene, |_| {});
+    let ours = compare::Levels {
+        width: film.width,
+        height: film.height,
+        rgb: film.to_rgb8().into_iter().map(f32::from).collect(),
+    };
+    let theirs = compare::load(reference).unwrap();
+    compare::compare(&ours, &theirs, 2.0)
+        .unwrap()
+        .within_tolerance
+}
+
+/// The figures of the course references. The issue's target is 95% within 2 levels; the
+/// floors asserted here are today's measurements, so that nothing slips below them. The
+/// gap is deep reflections (see the issue notes and README): the references weaken every
+/// bounce after the first by about 1/sqrt(2), which P3F.md section 4 does not.
+#[test]
+fn fidelity_against_the_course_references() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let cases = [
+        ("refs/scenes/balls_low.p3f", "refs/balls_low.png", 0.97),
+        (
+            "refs/scenes/balls_medium.p3f",
+            "refs/balls_medium.png",
+            0.93,
+        ),
+        ("scenes/balls_box.p3f", "refs/balls_box.png", 0.91),
+        ("refs/scenes/balls_high.p3f", "refs/balls_high.png", 0.86),
+    ];
+    for (scene, reference, floor) in cases {
+        let share = share_within_two_levels(&shared.join(scene), &shared.join(reference));
+        eprintln!(
+            "{scene}: {:.3}% of pixels within 2 levels of {reference}",
+            100.0 * share
+        );
+        assert!(share >= floor, "{scene}: {share} < {floor}");
+    }
+}
+
+#[test]
+fn every_course_scene_but_the_dragon_renders() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    for name in [
+        "balls_low",
+        "balls_medium",
+        "balls_high",
+        "balls_box",
+        "dof",
+        "motion",
+        "mount_low",
+        "mount_high",
+        "mount_very_high",
+    ] {
+        let scene = parse_file(&shared.join(format!("scenes/{name}.p3f"))).unwrap();
+        let mut options = RenderOptions::from_scene(&scene);
+        (options.width, options.height) = (24, 24);
+        let report = render(&scene, &options).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(report.warnings.is_empty(), "{name}: {:?}", report.warnings);
+        assert!(report.rays >= 24 * 24);
+    }
+}
