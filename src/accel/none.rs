@@ -42,16 +42,12 @@ pub fn closest(
     ray: &Ray,
     inv_dir: Vec3,
     t_min: f32,
-    mut t_max: f32,
+    t_max: f32,
 ) -> Option<Hit> {
-    let mut closest = None;
-    for kind in BOUNDED {
-        if let Some(hit) = closest_of_kind(geometry, kind, ray, inv_dir, t_min, t_max) {
-            t_max = hit.t;
-            closest = Some(hit);
-        }
-    }
-    closest
+    BOUNDED.iter().fold(None, |best: Option<Hit>, &kind| {
+        let t_max = best.map_or(t_max, |h| h.t);
+        closest_of_kind(geometry, kind, ray, inv_dir, t_min, t_max).or(best)
+    })
 }
 
 pub fn occluded(geometry: &Geometry, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> bool {

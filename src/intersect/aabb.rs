@@ -1,5 +1,6 @@
 use glam::Vec3;
 
+use super::first_root_in;
 use crate::ray::Ray;
 
 /// Slab test against the axis-aligned box `[min, max]`, with `inv_dir = 1 / ray.dir`
@@ -14,13 +15,7 @@ pub fn aabb(ray: &Ray, inv_dir: Vec3, min: Vec3, max: Vec3, t_min: f32, t_max: f
     if !(near <= far) {
         return None;
     }
-    if near > t_min && near < t_max {
-        Some(near)
-    } else if far > t_min && far < t_max {
-        Some(far)
-    } else {
-        None
-    }
+    first_root_in(near, far, t_min, t_max)
 }
 
 /// Outward normal of the face of `[min, max]` nearest to the point `p` (a hit point).

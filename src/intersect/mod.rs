@@ -16,3 +16,15 @@ pub use cone::{cone, cone_normal};
 pub use plane::plane;
 pub use sphere::sphere;
 pub use triangle::{triangle, TriangleHit};
+
+/// The first of two roots `near <= far` that lies in `(t_min, t_max)`: the entry of a
+/// convex shape, or its exit when the origin is inside.
+fn first_root_in(near: f32, far: f32, t_min: f32, t_max: f32) -> Option<f32> {
+    if near > t_min && near < t_max {
+        Some(near)
+    } else if far > t_min && far < t_max {
+        Some(far)
+    } else {
+        None
+    }
+}

@@ -1,5 +1,6 @@
 use glam::Vec3;
 
+use super::first_root_in;
 use crate::ray::Ray;
 
 /// Ray-sphere test. The report's early exit comes first: an origin outside the sphere with
@@ -22,13 +23,7 @@ pub fn sphere(ray: &Ray, centre: Vec3, radius: f32, t_min: f32, t_max: f32) -> O
     let q = b + disc.sqrt().copysign(b);
     let (r0, r1) = (c / q, q);
     let (near, far) = if r0 <= r1 { (r0, r1) } else { (r1, r0) };
-    if near > t_min && near < t_max {
-        Some(near)
-    } else if far > t_min && far < t_max {
-        Some(far)
-    } else {
-        None
-    }
+    first_root_in(near, far, t_min, t_max)
 }
 
 #[cfg(test)]

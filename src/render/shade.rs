@@ -260,6 +260,42 @@ mod tests {
         }
     }
 
+    /// Traces one ray from `origin` inside a glass sphere of radius 1 (ior 1.5, `Kd` 0,
+    /// white `Cs`, no lights) with `max_depth` 2; returns its colour and the rays taken.
+    fn trace_inside_glass(origin: Vec3, dir: Vec3) -> (Vec3, u64) {
+        let text = "bclr 0.2 0.4 0.6\nf 1 1 1 0 1 1 1 0 1 1 1.5\ns 0 0 0 1";
+        let scene = crate::scene::p3f::parse_text(text).unwrap();
+        let tracer = Tracer::new(&scene.geometry, crate::accel::Accel::None);
+        let options = ShadeOptions {
+            max_depth: 2,
+            schlick: false,
+        };
+        let shader = Shader::new(&scene, &tracer, None, options);
+        let mut rays = 0;
+        let colour = shader.trace(&Ray::new(origin, dir), 1, 1.5, &mut rays);
+        (colour, rays)
+    }
+
+    #[test]
+    fn refraction_spawns_a_reflected_and_a_transmitted_ray() {
+        let (colour, rays) = trace_inside_glass(Vec3::ZERO, Vec3::X);
+        assert_eq!(rays, 3);
+        // The transmitted ray sees the background with weight 1 - Kr = 0.96 (normal
+        // incidence); the reflected one stays inside and, at the depth limit, is black.
+        let expected = 0.96 * Vec3::new(0.2, 0.4, 0.6);
+        assert!((colour - expected).length() < 1e-6, "{colour}");
+    }
+
+    #[test]
+    fn total_internal_reflection_spawns_one_ray_and_no_nan() {
+        // From (0, 0.9, 0) along +x the ray meets the surface at about 64 degrees, beyond
+        // the critical angle of 41.8 degrees (the course code had no guard here).
+        let (colour, rays) = trace_inside_glass(Vec3::new(0.0, 0.9, 0.0), Vec3::X);
+        assert_eq!(rays, 2);
+        // The reflected ray stays inside and, at the depth limit, is black.
+        assert_eq!(colour, Vec3::ZERO);
+    }
+
     #[test]
     fn area_light_grid_covers_the_rectangle_with_the_full_colour() {
         let samples = light_samples(&[Light::Area {
