@@ -82,6 +82,7 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     options.threads = args.threads.map(|n| n as usize);
     options.seed = args.seed;
     options.progress = !args.quiet && std::io::stderr().is_terminal();
+    options.check_size().map_err(Failure::Usage)?;
 
     let report = render::render(&scene, &options).map_err(Failure::Run)?;
     for w in &report.warnings {

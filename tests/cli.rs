@@ -95,6 +95,12 @@ fn bad_usage_and_bad_scenes_exit_2_with_a_message() {
             dir.join("missing.p3f").display().to_string(),
         ],
         vec!["info".into(), bad.display().to_string()],
+        vec![
+            "render".into(),
+            showcase(),
+            "--resolution".into(),
+            "65536x65536".into(),
+        ],
     ];
     for args in cases {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();

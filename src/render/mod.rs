@@ -24,6 +24,9 @@ use skybox::Skybox;
 /// Tiles are square blocks of this many pixels a side: the unit of work of a thread.
 pub const TILE: u32 = 16;
 
+/// Largest image rendered, in pixels (6 GiB of film and tile memory).
+pub const MAX_PIXELS: u64 = 1 << 28;
+
 /// Where the samples of a pixel go.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Sampling {
@@ -93,6 +96,21 @@ impl RenderOptions {
             progress: false,
         }
     }
+
+    /// Refuses images too large to hold in memory, saying how much they would need.
+    pub fn check_size(&self) -> Result<(), String> {
+        let pixels = self.width as u64 * self.height as u64;
+        if pixels <= MAX_PIXELS {
+            return Ok(());
+        }
+        // The film and the tiles' copies hold 24 bytes a pixel.
+        Err(format!(
+            "a {}x{} image needs {:.1} GiB; the limit is {MAX_PIXELS} pixels",
+            self.width,
+            self.height,
+            (pixels * 24) as f64 / (1u64 << 30) as f64
+        ))
+    }
 }
 
 /// What a render produced besides the image.
@@ -107,6 +125,7 @@ pub struct RenderReport {
 
 /// Renders `scene` with every primitive tested against every ray.
 pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, String> {
+    options.check_size()?;
     let mut warnings = Vec::new();
     let skybox = match (&scene.skybox, options.skybox) {
         (Some(dir), true) => match Skybox::load(dir) {

@@ -44,6 +44,9 @@ impl Skybox {
                 let image = image::open(&path)
                     .map_err(|e| format!("cannot read {}: {e}", path.display()))?
                     .into_rgb8();
+                if image.width() == 0 || image.height() == 0 {
+                    return Err(format!("{} is empty", path.display()));
+                }
                 Ok(FaceImage {
                     width: image.width(),
                     height: image.height(),
