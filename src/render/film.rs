@@ -1,7 +1,6 @@
 //! The image being rendered and how it is written (P3F.md section 7).
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::Path;
 
 use glam::Vec3;
@@ -68,42 +67,26 @@ impl Film {
             .collect()
     }
 
-    /// Writes the image in the format of `path`'s extension. The bytes go to a temporary
-    /// file beside the target, renamed over it only when complete, so a failure never
-    /// leaves a truncated image behind.
+    /// Writes the image in the format of `path`'s extension, atomically
+    /// ([`crate::output::write_atomically`]): a failure never leaves a truncated image.
     pub fn write(&self, path: &Path) -> Result<(), String> {
         let format = OutputFormat::from_path(path)?;
-        let file_name = path
-            .file_name()
-            .map(|n| n.to_string_lossy())
-            .unwrap_or_default();
-        let partial = path.with_file_name(format!(".{file_name}.{}.partial", std::process::id()));
-        let result = self
-            .write_to(&partial, format)
-            .and_then(|_| std::fs::rename(&partial, path));
-        if result.is_err() {
-            let _ = std::fs::remove_file(&partial);
-        }
-        result.map_err(|e| format!("cannot write {}: {e}", path.display()))
+        crate::output::write_atomically(path, |out| self.encode(out, format))
     }
 
-    fn write_to(&self, path: &Path, format: OutputFormat) -> std::io::Result<()> {
-        let mut out = BufWriter::new(File::create(path)?);
+    fn encode(&self, out: &mut impl Write, format: OutputFormat) -> std::io::Result<()> {
         match format {
-            OutputFormat::Png => {
-                let encoder = image::codecs::png::PngEncoder::new(&mut out);
-                image::ImageEncoder::write_image(
-                    encoder,
-                    &self.to_rgb8(),
-                    self.width,
-                    self.height,
-                    image::ExtendedColorType::Rgb8,
-                )
-                .map_err(std::io::Error::other)?;
-            }
+            OutputFormat::Png => image::ImageEncoder::write_image(
+                image::codecs::png::PngEncoder::new(out),
+                &self.to_rgb8(),
+                self.width,
+                self.height,
+                image::ExtendedColorType::Rgb8,
+            )
+            .map_err(std::io::Error::other),
             OutputFormat::Ppm => {
                 write!(out, "P6\n{} {}\n255\n", self.width, self.height)?;
-                out.write_all(&self.to_rgb8())?;
+                out.write_all(&self.to_rgb8())
             }
             OutputFormat::Hdr => {
                 let pixels: Vec<image::Rgb<f32>> = self
@@ -111,12 +94,11 @@ impl Film {
                     .iter()
                     .map(|p| image::Rgb(p.to_array()))
                     .collect();
-                image::codecs::hdr::HdrEncoder::new(&mut out)
+                image::codecs::hdr::HdrEncoder::new(out)
                     .encode(&pixels, self.width as usize, self.height as usize)
-                    .map_err(std::io::Error::other)?;
+                    .map_err(std::io::Error::other)
             }
         }
-        out.into_inner().map_err(|e| e.into_error())?.sync_all()
     }
 }
 

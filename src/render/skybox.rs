@@ -5,10 +5,10 @@ use std::path::Path;
 use glam::Vec3;
 
 /// Face files in the order of [`Face`].
-const FACE_NAMES: [&str; 6] = ["right", "left", "top", "bottom", "front", "back"];
+pub const FACE_NAMES: [&str; 6] = ["right", "left", "top", "bottom", "front", "back"];
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Face {
+pub enum Face {
     Right = 0,
     Left = 1,
     Top = 2,
@@ -104,6 +104,35 @@ fn face_coordinates(d: Vec3) -> (Face, f32, f32, f32) {
     }
 }
 
+impl Face {
+    pub const ALL: [Face; 6] = [
+        Face::Right,
+        Face::Left,
+        Face::Top,
+        Face::Bottom,
+        Face::Front,
+        Face::Back,
+    ];
+
+    /// The file name of the face, without extension.
+    pub fn name(self) -> &'static str {
+        FACE_NAMES[self as usize]
+    }
+
+    /// The direction (largest component of magnitude 1) whose face coordinates are
+    /// `(sc, tc)` in [-1, 1]: the inverse of [`face_coordinates`].
+    pub fn direction(self, sc: f32, tc: f32) -> Vec3 {
+        match self {
+            Face::Left => Vec3::new(1.0, tc, sc),
+            Face::Right => Vec3::new(-1.0, tc, -sc),
+            Face::Top => Vec3::new(-sc, 1.0, -tc),
+            Face::Bottom => Vec3::new(-sc, -1.0, tc),
+            Face::Front => Vec3::new(-sc, tc, 1.0),
+            Face::Back => Vec3::new(sc, tc, -1.0),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -120,6 +149,16 @@ mod tests {
         assert_eq!(face_coordinates(Vec3::new(1., 1., 0.)).0, Face::Top);
         assert_eq!(face_coordinates(Vec3::new(1., 0., 1.)).0, Face::Left);
         assert_eq!(face_coordinates(Vec3::new(0., -1., 1.)).0, Face::Bottom);
+    }
+
+    #[test]
+    fn face_direction_inverts_face_coordinates() {
+        for face in Face::ALL {
+            for (sc, tc) in [(0.0, 0.0), (0.5, -0.25), (-0.9, 0.9)] {
+                let (f, s, t, m) = face_coordinates(face.direction(sc, tc));
+                assert_eq!((f, s / m, t / m), (face, sc, tc));
+            }
+        }
     }
 
     #[test]

@@ -1,8 +1,10 @@
 //! The scene model: geometry in structure-of-arrays form, materials, lights and camera,
 //! read from P3F files by [`p3f`].
 
+pub mod generate;
 pub mod geometry;
 pub mod p3f;
+pub mod ply;
 
 use std::path::PathBuf;
 
