@@ -21,10 +21,13 @@ pub struct Cli {
 pub enum Command {
     /// Render a P3F scene to an image.
     Render(RenderArgs),
-    /// Print what a scene holds: objects by kind, materials, lights, camera.
+    /// Print what a scene holds (objects by kind, materials, lights, camera) and the
+    /// statistics of its acceleration structure.
     Info {
         /// The P3F scene file.
         scene: PathBuf,
+        #[command(flatten)]
+        accel: AccelArgs,
     },
     /// Print how two images differ; exit 1 when too few pixels are within the tolerance.
     Compare(CompareArgs),
@@ -175,6 +178,54 @@ pub struct RenderArgs {
     /// No progress bar and no closing statistics line (warnings still go to stderr).
     #[arg(short, long)]
     pub quiet: bool,
+    /// Also print the structure's build time and statistics.
+    #[arg(long, conflicts_with = "quiet")]
+    pub stats: bool,
+    #[command(flatten)]
+    pub accel: AccelArgs,
+}
+
+/// The acceleration structure (P3F.md section 9).
+#[derive(Args, Debug)]
+pub struct AccelArgs {
+    /// Acceleration structure. Default: the file's `accel` line (0 none, 1 grid, 2 bvh),
+    /// else bvh.
+    #[arg(long, value_enum, value_name = "KIND")]
+    pub accel: Option<AccelChoice>,
+    /// How the BVH is built: sah (binned surface area heuristic, fast) or midpoint (the
+    /// course report's: longest-axis midpoint, leaves of at most two objects).
+    #[arg(long, value_enum, value_name = "BUILD", default_value_t = BvhChoice::Sah)]
+    pub bvh: BvhChoice,
+    /// The grid's density m: floor(m * w * (N / V)^(1/3)) + 1 cells along an axis of
+    /// width w, for N objects in a box of volume V.
+    #[arg(long, value_name = "M", default_value_t = 2.0, value_parser = parse_density)]
+    pub grid_density: f32,
+    /// Grid only: test an object that spans several cells once per ray (mailboxing).
+    #[arg(long)]
+    pub mailbox: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum AccelChoice {
+    /// Brute force: every object against every ray.
+    None,
+    /// The report's uniform grid with 3D-DDA traversal.
+    Grid,
+    /// A bounding volume hierarchy (see --bvh).
+    Bvh,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BvhChoice {
+    Sah,
+    Midpoint,
+}
+
+fn parse_density(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(m) if m > 0.0 && m <= 64.0 => Ok(m),
+        _ => Err(format!("'{text}' is not a grid density between 0 and 64")),
+    }
 }
 
 #[derive(Args, Debug)]

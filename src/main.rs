@@ -9,7 +9,12 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
-use cli::{Cli, Command, CompareArgs, GenCommand, RenderArgs, SceneOutput, UpAxis};
+use cli::{
+    AccelArgs, AccelChoice, BvhChoice, Cli, Command, CompareArgs, GenCommand, RenderArgs,
+    SceneOutput, UpAxis,
+};
+use p3trace::accel::bvh::BvhBuild;
+use p3trace::accel::{Accel, AccelKind, AccelOptions};
 use p3trace::ray::PrimKind;
 use p3trace::render::film::OutputFormat;
 use p3trace::render::{self, RenderOptions, Sampling};
@@ -28,7 +33,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => run_render(&args),
-        Command::Info { scene } => run_info(&scene),
+        Command::Info { scene, accel } => run_info(&scene, &accel),
         Command::Compare(args) => run_compare(&args),
         Command::Gen(command) => run_gen(command),
     };
@@ -84,6 +89,7 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     options.threads = args.threads.map(|n| n as usize);
     options.seed = args.seed;
     options.progress = !args.quiet && std::io::stderr().is_terminal();
+    options.accel = accel_options(&scene, &args.accel);
     options.check_size().map_err(Failure::Usage)?;
 
     let report = render::render(&scene, &options).map_err(Failure::Run)?;
@@ -91,6 +97,16 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
         eprintln!("p3trace: warning: {w}");
     }
     report.film.write(&output).map_err(Failure::Run)?;
+    if args.stats {
+        println!(
+            "{}: built in {:.3} s",
+            report.accel_name,
+            report.build_time.as_secs_f64()
+        );
+        for line in &report.accel_stats {
+            println!("  {line}");
+        }
+    }
     if !args.quiet {
         let seconds = report.elapsed.as_secs_f64();
         println!(
@@ -108,7 +124,41 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn run_info(path: &Path) -> Result<ExitCode, Failure> {
+/// The structure the command line asks for, else the file's, else the BVH; with a note
+/// on stderr when the file's `accel 0` would make a large scene slow.
+fn accel_options(scene: &Scene, args: &AccelArgs) -> AccelOptions {
+    let kind = match args.accel {
+        Some(AccelChoice::None) => AccelKind::None,
+        Some(AccelChoice::Grid) => AccelKind::Grid,
+        Some(AccelChoice::Bvh) => AccelKind::Bvh,
+        None => {
+            let objects = scene.geometry.bounded_count();
+            if scene.accel == Some(AccelKind::None) && objects > SLOW_WITHOUT_ACCEL {
+                eprintln!(
+                    "p3trace: note: {} asks for no acceleration structure ('accel 0') over \
+                     {objects} objects; --accel bvh would be much faster",
+                    scene.name
+                );
+            }
+            scene.accel.unwrap_or(AccelKind::Bvh)
+        }
+    };
+    AccelOptions {
+        kind,
+        bvh: match args.bvh {
+            BvhChoice::Sah => BvhBuild::Sah,
+            BvhChoice::Midpoint => BvhBuild::Midpoint,
+        },
+        grid_density: args.grid_density,
+        mailbox: args.mailbox,
+        ..AccelOptions::default()
+    }
+}
+
+/// Above this many objects, brute force is much slower than a structure.
+const SLOW_WITHOUT_ACCEL: usize = 300;
+
+fn run_info(path: &Path, accel_args: &AccelArgs) -> Result<ExitCode, Failure> {
     let scene = load_scene(path)?;
     let g = &scene.geometry;
     println!("scene: {}", scene.name);
@@ -153,6 +203,16 @@ fn run_info(path: &Path) -> Result<ExitCode, Failure> {
         .map_or("not set".to_string(), |a| format!("{a:?}").to_lowercase());
     println!("accel (file): {accel}");
     println!("spp (file): {}", scene.spp);
+    let options = accel_options(&scene, accel_args);
+    let (structure, build_time) = Accel::build(&scene.geometry, &options);
+    println!(
+        "structure: {}, built in {:.3} s",
+        structure.name(),
+        build_time.as_secs_f64()
+    );
+    for line in structure.stats() {
+        println!("  {line}");
+    }
     Ok(ExitCode::SUCCESS)
 }
 

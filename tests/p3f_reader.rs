@@ -8,7 +8,7 @@ use std::time::Instant;
 use glam::Vec3;
 use p3trace::ray::PrimKind;
 use p3trace::scene::p3f::parse_text;
-use p3trace::scene::{parse_file, AccelPreference, Light, Material};
+use p3trace::scene::{parse_file, AccelKind, Light, Material};
 
 const CAMERA: &str = "v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 0.01\nresolution 64 48\naperture 0\nfocal 1\n";
 
@@ -34,7 +34,7 @@ fn reads_every_directive() {
     );
     let scene = parse_text(&text).unwrap();
     let g = &scene.geometry;
-    assert_eq!(scene.accel, Some(AccelPreference::Bvh));
+    assert_eq!(scene.accel, Some(AccelKind::Bvh));
     assert_eq!(scene.spp, 3);
     assert_eq!(scene.background, Vec3::new(0.1, 0.2, 0.3));
     assert_eq!(scene.skybox.as_deref(), Some(Path::new("sky")));

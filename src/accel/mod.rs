@@ -1,15 +1,36 @@
-//! Closest-hit and occlusion queries over a scene's geometry.
+//! Closest-hit and occlusion queries over a scene's geometry (P3F.md section 9).
 //!
 //! Every accelerator sits behind [`Accel`], so the renderer does not care which one runs.
 //! Planes are unbounded and never go into a structure: [`Tracer`] tests them on their own
 //! beside whatever the accelerator returns.
+//!
+//! All structures return exactly the hit of brute force: the smallest `t`, and at equal
+//! `t` the smallest [`PrimId`] ([`ClosestHit`] keeps that rule), so the images of every
+//! structure are the same byte for byte.
 
+pub mod bounds;
+pub mod bvh;
+pub mod grid;
 mod none;
+
+use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
-use crate::ray::{Hit, PrimKind, Ray};
+use crate::ray::{Hit, PrimId, PrimKind, Ray};
+pub use crate::scene::AccelKind;
 use crate::scene::Geometry;
+use bvh::{Bvh, BvhBuild};
+use grid::Grid;
+
+/// The bounded primitive kinds, in [`PrimId`] order.
+pub const BOUNDED: [PrimKind; 5] = [
+    PrimKind::Sphere,
+    PrimKind::MovingSphere,
+    PrimKind::Triangle,
+    PrimKind::Box,
+    PrimKind::Cone,
+];
 
 /// The acceleration structure over a scene's bounded primitives.
 #[derive(Clone, Debug)]
@@ -17,6 +38,112 @@ pub enum Accel {
     /// Every ray is tested against every primitive: the reference the others are checked
     /// against.
     None,
+    Grid(Grid),
+    Bvh(Bvh),
+}
+
+/// How to build the structure.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AccelOptions {
+    pub kind: AccelKind,
+    pub bvh: BvhBuild,
+    /// The grid's `m`: cells per axis grow as `m * w_i * (N / V)^(1/3)`.
+    pub grid_density: f32,
+    /// Test an object that spans several grid cells only once per ray.
+    pub mailbox: bool,
+    /// The shutter interval: moving spheres are bounded over all of it.
+    pub shutter: [f32; 2],
+}
+
+impl Default for AccelOptions {
+    fn default() -> Self {
+        AccelOptions {
+            kind: AccelKind::Bvh,
+            bvh: BvhBuild::Sah,
+            grid_density: grid::DEFAULT_DENSITY,
+            mailbox: false,
+            shutter: [0.0, 0.0],
+        }
+    }
+}
+
+impl Accel {
+    /// Builds the structure `options` asks for, and says how long that took.
+    pub fn build(geometry: &Geometry, options: &AccelOptions) -> (Accel, Duration) {
+        let start = Instant::now();
+        let accel = match options.kind {
+            AccelKind::None => Accel::None,
+            AccelKind::Grid => Accel::Grid(Grid::build(geometry, options)),
+            AccelKind::Bvh => Accel::Bvh(Bvh::build(geometry, options.bvh, options.shutter)),
+        };
+        (accel, start.elapsed())
+    }
+
+    /// A short name: `none`, `grid`, `grid+mailbox`, `bvh midpoint`, `bvh sah`.
+    pub fn name(&self) -> String {
+        match self {
+            Accel::None => "none".into(),
+            Accel::Grid(g) => g.name(),
+            Accel::Bvh(b) => b.name(),
+        }
+    }
+
+    /// The structure's statistics, one `name: value` per line.
+    pub fn stats(&self) -> Vec<String> {
+        match self {
+            Accel::None => vec![],
+            Accel::Grid(g) => g.stats(),
+            Accel::Bvh(b) => b.stats(),
+        }
+    }
+}
+
+/// The closest hit found so far along a ray, with the tie rule of brute force: at equal
+/// `t` the smaller [`PrimId`] wins, whatever order the primitives are tested in.
+#[derive(Clone, Copy, Debug)]
+pub struct ClosestHit {
+    pub hit: Option<Hit>,
+    t_max: f32,
+}
+
+impl ClosestHit {
+    pub fn new(t_max: f32) -> Self {
+        ClosestHit { hit: None, t_max }
+    }
+
+    /// Hits at or beyond this distance cannot win; a hit exactly at it may (a tie).
+    pub fn limit(&self) -> f32 {
+        self.hit.map_or(self.t_max, |h| h.t)
+    }
+
+    /// Tests `prim` and keeps its hit if it is closer, or as close with a smaller id.
+    pub fn test(
+        &mut self,
+        geometry: &Geometry,
+        prim: PrimId,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+    ) {
+        // The routines take an open interval, so a tie needs the next float up.
+        let bound = match self.hit {
+            Some(h) => h.t.next_up(),
+            None => self.t_max,
+        };
+        if let Some(h) = geometry.intersect(prim, ray, inv_dir, t_min, bound) {
+            let wins = self
+                .hit
+                .is_none_or(|best| h.t < best.t || (h.t == best.t && prim < best.prim));
+            if wins {
+                self.hit = Some(Hit {
+                    t: h.t,
+                    prim,
+                    u: h.u,
+                    v: h.v,
+                });
+            }
+        }
+    }
 }
 
 /// Answers ray queries for one scene: the accelerator for bounded primitives, planes apart.
@@ -33,9 +160,15 @@ impl<'s> Tracer<'s> {
     /// The closest hit with `t` in `(t_min, t_max)`.
     pub fn closest(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         let inv_dir = ray.dir.recip();
-        let bounded = match &self.accel {
-            Accel::None => none::closest(self.geometry, ray, inv_dir, t_min, t_max),
-        };
+        let mut closest = ClosestHit::new(t_max);
+        let g = self.geometry;
+        match &self.accel {
+            Accel::None => none::closest(g, ray, inv_dir, t_min, &mut closest),
+            Accel::Grid(grid) => grid.closest(g, ray, inv_dir, t_min, &mut closest),
+            Accel::Bvh(bvh) => bvh.closest(g, ray, inv_dir, t_min, &mut closest),
+        }
+        // Planes come last in id order, so a plane at the same `t` loses the tie.
+        let bounded = closest.hit;
         let t_max = bounded.map_or(t_max, |h| h.t);
         self.closest_plane(ray, inv_dir, t_min, t_max).or(bounded)
     }
@@ -43,13 +176,20 @@ impl<'s> Tracer<'s> {
     /// Whether anything blocks the ray within `(t_min, t_max)`.
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         let inv_dir = ray.dir.recip();
+        let g = self.geometry;
         self.closest_plane(ray, inv_dir, t_min, t_max).is_some()
             || match &self.accel {
-                Accel::None => none::occluded(self.geometry, ray, inv_dir, t_min, t_max),
+                Accel::None => none::occluded(g, ray, inv_dir, t_min, t_max),
+                Accel::Grid(grid) => grid.occluded(g, ray, inv_dir, t_min, t_max),
+                Accel::Bvh(bvh) => bvh.occluded(g, ray, inv_dir, t_min, t_max),
             }
     }
 
     fn closest_plane(&self, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
-        none::closest_of_kind(self.geometry, PrimKind::Plane, ray, inv_dir, t_min, t_max)
+        let mut closest = ClosestHit::new(t_max);
+        for prim in self.geometry.ids(PrimKind::Plane) {
+            closest.test(self.geometry, prim, ray, inv_dir, t_min);
+        }
+        closest.hit
     }
 }

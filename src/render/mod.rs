@@ -13,7 +13,7 @@ use glam::{Vec2, Vec3};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
-use crate::accel::{Accel, Tracer};
+use crate::accel::{Accel, AccelKind, AccelOptions, Tracer};
 use crate::scene::Scene;
 use camera::Camera;
 use film::Film;
@@ -80,6 +80,8 @@ pub struct RenderOptions {
     pub seed: u64,
     /// Show a progress bar on stderr.
     pub progress: bool,
+    /// The acceleration structure and how to build it.
+    pub accel: AccelOptions,
 }
 
 impl RenderOptions {
@@ -94,6 +96,10 @@ impl RenderOptions {
             threads: None,
             seed: 0,
             progress: false,
+            accel: AccelOptions {
+                kind: scene.accel.unwrap_or(AccelKind::Bvh),
+                ..AccelOptions::default()
+            },
         }
     }
 
@@ -119,11 +125,16 @@ pub struct RenderReport {
     pub film: Film,
     /// Every ray traced: primary, shadow and secondary.
     pub rays: u64,
+    /// Time spent rendering, after the structure was built.
     pub elapsed: Duration,
+    pub build_time: Duration,
+    /// The structure's name and statistics lines.
+    pub accel_name: String,
+    pub accel_stats: Vec<String>,
     pub warnings: Vec<String>,
 }
 
-/// Renders `scene` with every primitive tested against every ray.
+/// Renders `scene` with the structure `options.accel` asks for.
 pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, String> {
     options.check_size()?;
     let mut warnings = Vec::new();
@@ -139,7 +150,9 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         },
         _ => None,
     };
-    let tracer = Tracer::new(&scene.geometry, Accel::None);
+    let (accel, build_time) = Accel::build(&scene.geometry, &options.accel);
+    let (accel_name, accel_stats) = (accel.name(), accel.stats());
+    let tracer = Tracer::new(&scene.geometry, accel);
     let shader = Shader::new(scene, &tracer, skybox.as_ref(), options.shade);
     let camera = Camera::new(&scene.camera, options.width, options.height);
 
@@ -190,6 +203,9 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         film,
         rays,
         elapsed,
+        build_time,
+        accel_name,
+        accel_stats,
         warnings,
     })
 }

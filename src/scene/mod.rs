@@ -88,9 +88,10 @@ impl Default for CameraSpec {
     }
 }
 
-/// The accelerator a file asks for with `accel N`.
+/// An acceleration structure, as a file asks for it with `accel N` (0, 1, 2) or the
+/// command line with `--accel`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum AccelPreference {
+pub enum AccelKind {
     None,
     Grid,
     Bvh,
@@ -116,7 +117,7 @@ pub struct Scene {
     pub background: Vec3,
     /// `env DIR`, resolved against the scene file's folder.
     pub skybox: Option<PathBuf>,
-    pub accel: Option<AccelPreference>,
+    pub accel: Option<AccelKind>,
     /// `spp k`: k x k jittered samples per pixel; 0 is one sample at the pixel centre.
     pub spp: u32,
     /// How many `mesh` directives there were, and the triangles they made.

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::{AccelPreference, CameraSpec, Light, Material, Scene, Warning};
+use super::{AccelKind, CameraSpec, Light, Material, Scene, Warning};
 
 /// Largest `spp k` accepted: k x k samples per pixel.
 pub const MAX_SPP_SIDE: u32 = 1024;
@@ -318,9 +318,9 @@ impl<'a> Parser<'a> {
             "accel" => {
                 let (n, t) = self.integer("the accelerator (0, 1 or 2)")?;
                 self.scene.accel = Some(match n {
-                    0 => AccelPreference::None,
-                    1 => AccelPreference::Grid,
-                    2 => AccelPreference::Bvh,
+                    0 => AccelKind::None,
+                    1 => AccelKind::Grid,
+                    2 => AccelKind::Bvh,
                     _ => {
                         return Err(self.error_token(
                             t,

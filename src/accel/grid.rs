@@ -1,0 +1,380 @@
+//! The course report's uniform grid (P3F.md section 9): `floor(m w_i s) + 1` cells along
+//! each axis with `s = (N / V)^(1/3)`, every object listed in each cell its box overlaps,
+//! and the 3D-DDA traversal of Amanatides and Woo.
+//!
+//! The report accepts a hit only when it lies before the current cell's exit and finds it
+//! again in a later cell otherwise. Here a hit beyond the exit is kept as a candidate and
+//! the walk stops once a cell's exit passes it: the same answer, and it lets mailboxing
+//! (`--mailbox`) test an object that spans several cells only once per ray.
+
+use std::cell::RefCell;
+
+use glam::{UVec3, Vec3};
+
+use super::bounds::{prim_bounds, Aabb};
+use super::{AccelOptions, ClosestHit, BOUNDED};
+use crate::ray::{PrimId, Ray};
+use crate::scene::Geometry;
+
+/// The report's `m`.
+pub const DEFAULT_DENSITY: f32 = 2.0;
+
+/// At most this many cells along an axis: flat scenes would otherwise ask for millions.
+pub const MAX_AXIS_CELLS: u32 = 512;
+
+#[derive(Clone, Debug)]
+pub struct Grid {
+    bounds: Aabb,
+    resolution: UVec3,
+    cell_size: Vec3,
+    inv_cell_size: Vec3,
+    /// Cell `c`'s objects are `refs[cell_start[c]..cell_start[c + 1]]` (cells x fastest).
+    cell_start: Vec<u32>,
+    /// Indices into `prims`.
+    refs: Vec<u32>,
+    prims: Vec<PrimId>,
+    density: f32,
+    mailbox: bool,
+}
+
+impl Grid {
+    pub fn build(geometry: &Geometry, options: &AccelOptions) -> Grid {
+        let mut prims = Vec::with_capacity(geometry.bounded_count());
+        let mut boxes = Vec::with_capacity(geometry.bounded_count());
+        for kind in BOUNDED {
+            for prim in geometry.ids(kind) {
+                let b = prim_bounds(geometry, prim, options.shutter);
+                if !b.is_empty() {
+                    prims.push(prim);
+                    boxes.push(b);
+                }
+            }
+        }
+        let tight = boxes.iter().fold(Aabb::EMPTY, |a, &b| a.union(b));
+        let (bounds, resolution) = if tight.is_empty() {
+            (Aabb::EMPTY, UVec3::ONE)
+        } else {
+            // Padding keeps a flat scene's box from having zero volume.
+            let scale = tight.extent().max_element().max(1e-6);
+            let bounds = tight.padded(scale * 1e-4);
+            let resolution = cells_per_axis(bounds.extent(), prims.len(), options.grid_density);
+            (bounds, resolution)
+        };
+        let cell_size = bounds.extent() / resolution.as_vec3();
+        let inv_cell_size = cell_size.recip();
+        let mut grid = Grid {
+            bounds,
+            resolution,
+            cell_size,
+            inv_cell_size,
+            cell_start: Vec::new(),
+            refs: Vec::new(),
+            prims,
+            density: options.grid_density,
+            mailbox: options.mailbox,
+        };
+        grid.fill(&boxes);
+        grid
+    }
+
+    /// Lists every object in the cells its box overlaps: count, prefix sums, then place.
+    fn fill(&mut self, boxes: &[Aabb]) {
+        let cells = (self.resolution.x * self.resolution.y * self.resolution.z) as usize;
+        let mut start = vec![0u32; cells + 1];
+        let ranges: Vec<(UVec3, UVec3)> = boxes
+            .iter()
+            .map(|b| (self.cell_of(b.min), self.cell_of(b.max)))
+            .collect();
+        for &(lo, hi) in &ranges {
+            self.for_cells(lo, hi, |c| start[c + 1] += 1);
+        }
+        for c in 0..cells {
+            start[c + 1] += start[c];
+        }
+        let mut next = start.clone();
+        let mut refs = vec![0u32; start[cells] as usize];
+        for (i, &(lo, hi)) in ranges.iter().enumerate() {
+            self.for_cells(lo, hi, |c| {
+                refs[next[c] as usize] = i as u32;
+                next[c] += 1;
+            });
+        }
+        self.cell_start = start;
+        self.refs = refs;
+    }
+
+    fn for_cells(&self, lo: UVec3, hi: UVec3, mut visit: impl FnMut(usize)) {
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    visit(self.cell_index(UVec3::new(x, y, z)));
+                }
+            }
+        }
+    }
+
+    /// The cell holding point `p`, clamped into the grid.
+    fn cell_of(&self, p: Vec3) -> UVec3 {
+        let c = ((p - self.bounds.min) * self.inv_cell_size).floor();
+        let max = (self.resolution - 1).as_vec3();
+        // `max(ZERO)` also turns NaN into 0.
+        c.max(Vec3::ZERO).min(max).as_uvec3()
+    }
+
+    fn cell_index(&self, c: UVec3) -> usize {
+        ((c.z * self.resolution.y + c.y) * self.resolution.x + c.x) as usize
+    }
+
+    pub fn name(&self) -> String {
+        if self.mailbox {
+            "grid+mailbox".into()
+        } else {
+            "grid".into()
+        }
+    }
+
+    pub fn closest(
+        &self,
+        geometry: &Geometry,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+        closest: &mut ClosestHit,
+    ) {
+        Mailbox::with(self.mailbox, self.prims.len(), |mailbox| {
+            self.walk(ray, inv_dir, t_min, closest.limit(), |cell_refs, t_exit| {
+                for &r in cell_refs {
+                    if mailbox.first_visit(r) {
+                        closest.test(geometry, self.prims[r as usize], ray, inv_dir, t_min);
+                    }
+                }
+                // Stop once the closest hit lies inside the cells walked so far.
+                if closest.limit() < t_exit {
+                    return Walk::Stop;
+                }
+                Walk::Continue(closest.limit())
+            })
+        });
+    }
+
+    pub fn occluded(
+        &self,
+        geometry: &Geometry,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
+        let mut blocked = false;
+        Mailbox::with(self.mailbox, self.prims.len(), |mailbox| {
+            self.walk(ray, inv_dir, t_min, t_max, |cell_refs, _| {
+                blocked = cell_refs.iter().any(|&r| {
+                    mailbox.first_visit(r)
+                        && geometry
+                            .intersect(self.prims[r as usize], ray, inv_dir, t_min, t_max)
+                            .is_some()
+                });
+                if blocked {
+                    Walk::Stop
+                } else {
+                    Walk::Continue(t_max)
+                }
+            })
+        });
+        blocked
+    }
+
+    /// The 3D-DDA: calls `visit` with each cell's objects and the distance at which the
+    /// ray leaves that cell, in order along the ray, while `visit` says to continue and
+    /// the ray is within `(t_min, t_max)` (which `visit` may shrink).
+    fn walk(
+        &self,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+        mut visit: impl FnMut(&[u32], f32) -> Walk,
+    ) {
+        if self.refs.is_empty() {
+            return;
+        }
+        let Some((t_enter, t_leave)) = slab(&self.bounds, ray, inv_dir, t_min, t_max) else {
+            return;
+        };
+        let mut t_end = t_leave;
+        let mut cell = self.cell_of(ray.at(t_enter)).as_ivec3();
+        let res = self.resolution.as_ivec3();
+        let step = ray.dir.signum().as_ivec3();
+        // Distance to the next cell boundary along each axis, and between boundaries.
+        let mut t_next = Vec3::INFINITY;
+        let mut t_delta = Vec3::INFINITY;
+        for k in 0..3 {
+            if ray.dir[k] != 0.0 && inv_dir[k].is_finite() {
+                let side = if ray.dir[k] > 0.0 { 1 } else { 0 };
+                let boundary = self.bounds.min[k] + (cell[k] + side) as f32 * self.cell_size[k];
+                t_next[k] = (boundary - ray.origin[k]) * inv_dir[k];
+                t_delta[k] = self.cell_size[k] * inv_dir[k].abs();
+            }
+        }
+        loop {
+            let c = self.cell_index(cell.as_uvec3());
+            let cell_refs =
+                &self.refs[self.cell_start[c] as usize..self.cell_start[c + 1] as usize];
+            let t_exit = t_next.min_element();
+            if !cell_refs.is_empty() {
+                match visit(cell_refs, t_exit) {
+                    Walk::Stop => return,
+                    Walk::Continue(limit) => t_end = t_end.min(limit),
+                }
+            }
+            if !(t_exit <= t_end) {
+                return;
+            }
+            let k = if t_next.x <= t_next.y && t_next.x <= t_next.z {
+                0
+            } else if t_next.y <= t_next.z {
+                1
+            } else {
+                2
+            };
+            cell[k] += step[k];
+            if cell[k] < 0 || cell[k] >= res[k] {
+                return;
+            }
+            t_next[k] += t_delta[k];
+        }
+    }
+
+    pub fn stats(&self) -> Vec<String> {
+        let cells = self.cell_start.len() - 1;
+        let counts = self.cell_start.windows(2).map(|w| w[1] - w[0]);
+        let empty = counts.clone().filter(|&n| n == 0).count();
+        let max = counts.max().unwrap_or(0);
+        let memory = 4 * (self.cell_start.len() + self.refs.len() + self.prims.len());
+        vec![
+            format!(
+                "grid resolution: {} x {} x {} (m = {})",
+                self.resolution.x, self.resolution.y, self.resolution.z, self.density
+            ),
+            format!("objects: {}", self.prims.len()),
+            format!(
+                "cells: {cells}, empty: {empty} ({:.1}%)",
+                100.0 * empty as f64 / cells.max(1) as f64
+            ),
+            format!(
+                "references: {} ({:.2} per object), per non-empty cell: {:.2} mean, {max} max",
+                self.refs.len(),
+                self.refs.len() as f64 / self.prims.len().max(1) as f64,
+                self.refs.len() as f64 / (cells - empty).max(1) as f64
+            ),
+            format!("memory: {:.2} MiB", memory as f64 / (1 << 20) as f64),
+        ]
+    }
+}
+
+/// What the visitor of [`Grid::walk`] wants next.
+enum Walk {
+    Stop,
+    /// Go on, but not beyond this distance.
+    Continue(f32),
+}
+
+/// Cells per axis: `floor(m w_i (N / V)^(1/3)) + 1`, at most [`MAX_AXIS_CELLS`].
+pub fn cells_per_axis(extent: Vec3, objects: usize, density: f32) -> UVec3 {
+    let volume = extent.x as f64 * extent.y as f64 * extent.z as f64;
+    let s = (objects as f64 / volume).cbrt();
+    UVec3::from_array(extent.to_array().map(|w| {
+        let n = (density as f64 * w as f64 * s).floor() + 1.0;
+        if n.is_nan() {
+            1
+        } else {
+            n.min(MAX_AXIS_CELLS as f64) as u32
+        }
+    }))
+}
+
+/// Where the ray is inside `b` within `(t_min, t_max)`: entry and exit distances.
+/// `f32::min`/`max` ignore the NaN of `0 * inf`, so a ray in a slab's plane passes.
+fn slab(b: &Aabb, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
+    let mut near = t_min;
+    let mut far = t_max;
+    for k in 0..3 {
+        let t1 = (b.min[k] - ray.origin[k]) * inv_dir[k];
+        let t2 = (b.max[k] - ray.origin[k]) * inv_dir[k];
+        near = near.max(t1.min(t2));
+        far = far.min(t1.max(t2));
+    }
+    (near <= far).then_some((near, far))
+}
+
+thread_local! {
+    /// Per-thread mailboxes: `stamps[i]` is the last query that tested object `i`.
+    static MAILBOX: RefCell<(Vec<u32>, u32)> = const { RefCell::new((Vec::new(), 0)) };
+}
+
+/// One query's view of the thread's mailbox; without mailboxing, every visit is a first.
+struct Mailbox<'a> {
+    stamps: Option<&'a mut [u32]>,
+    stamp: u32,
+}
+
+impl Mailbox<'_> {
+    /// Runs one query `f` with a fresh stamp in this thread's mailbox (when `enabled`).
+    fn with<R>(enabled: bool, objects: usize, f: impl FnOnce(&mut Mailbox) -> R) -> R {
+        if !enabled {
+            return f(&mut Mailbox {
+                stamps: None,
+                stamp: 0,
+            });
+        }
+        MAILBOX.with_borrow_mut(|(stamps, last)| {
+            if stamps.len() < objects {
+                stamps.resize(objects, 0);
+            }
+            *last = last.wrapping_add(1);
+            if *last == 0 {
+                // After 2^32 queries the stamps wrap: start again from clean boxes.
+                stamps.fill(0);
+                *last = 1;
+            }
+            f(&mut Mailbox {
+                stamp: *last,
+                stamps: Some(&mut stamps[..]),
+            })
+        })
+    }
+
+    /// Whether object `i` is met for the first time in this query.
+    fn first_visit(&mut self, i: u32) -> bool {
+        match &mut self.stamps {
+            None => true,
+            Some(stamps) => {
+                let seen = stamps[i as usize] == self.stamp;
+                stamps[i as usize] = self.stamp;
+                !seen
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_follow_the_report_formula() {
+        // 1000 objects in a 10 x 10 x 10 box: s = 1, so floor(2 * 10) + 1 = 21 cells.
+        assert_eq!(
+            cells_per_axis(Vec3::splat(10.0), 1000, 2.0),
+            UVec3::splat(21)
+        );
+        // The same volume stretched: s stays 1.
+        assert_eq!(
+            cells_per_axis(Vec3::new(10.0, 5.0, 20.0), 1000, 2.0),
+            UVec3::new(21, 11, 41)
+        );
+        // A flat box would ask for unbounded cells; each axis is capped.
+        let flat = cells_per_axis(Vec3::new(10.0, 0.0, 10.0), 100, 2.0);
+        assert_eq!(flat, UVec3::new(MAX_AXIS_CELLS, 1, MAX_AXIS_CELLS));
+    }
+}
