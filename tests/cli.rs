@@ -263,3 +263,75 @@ fn gen_dragon_reads_the_stanford_model_when_fetched() {
     let info = stdout(&p3trace(&["info", scene.to_str().unwrap()]));
     assert!(info.contains("(11102 triangles from 1 meshes)"), "{info}");
 }
+
+#[test]
+fn accel_choice_notes_and_statistics() {
+    let dir = scratch("cli_accel");
+    let scene = dir.join("flake.p3f");
+    let flake = stdout(&p3trace(&["gen", "balls", "--depth", "3", "--no-env"]));
+    std::fs::write(&scene, format!("accel 0\n{flake}")).unwrap();
+    let scene = scene.to_str().unwrap();
+    let out = dir.join("flake.png");
+    let out = out.to_str().unwrap();
+    let render = |extra: &[&str]| {
+        let mut args = vec!["render", scene, "-o", out, "--resolution", "16x16"];
+        args.extend_from_slice(extra);
+        p3trace(&args)
+    };
+    let asked_none = render(&[]);
+    assert!(asked_none.status.success(), "{}", stderr(&asked_none));
+    assert!(
+        stderr(&asked_none)
+            .contains("'accel 0') over 822 objects; --accel bvh would be much faster"),
+        "{}",
+        stderr(&asked_none)
+    );
+    let chosen = render(&["--accel", "grid", "--stats"]);
+    assert!(
+        !stderr(&chosen).contains("much faster"),
+        "{}",
+        stderr(&chosen)
+    );
+    assert!(
+        stdout(&chosen).contains("grid: built in"),
+        "{}",
+        stdout(&chosen)
+    );
+    assert!(
+        stdout(&chosen).contains("grid resolution:"),
+        "{}",
+        stdout(&chosen)
+    );
+
+    let info = stdout(&p3trace(&[
+        "info", scene, "--accel", "bvh", "--bvh", "midpoint",
+    ]));
+    for expected in [
+        "structure: bvh midpoint",
+        "nodes:",
+        "depth",
+        "primitives per leaf:",
+        "sah cost:",
+        "memory:",
+    ] {
+        assert!(info.contains(expected), "{expected} not in {info}");
+    }
+    let info = stdout(&p3trace(&[
+        "info",
+        scene,
+        "--accel",
+        "grid",
+        "--grid-density",
+        "1",
+    ]));
+    for expected in [
+        "structure: grid",
+        "(m = 1)",
+        "empty:",
+        "per non-empty cell:",
+    ] {
+        assert!(info.contains(expected), "{expected} not in {info}");
+    }
+    let bad = p3trace(&["info", scene, "--grid-density", "0"]);
+    assert_eq!(bad.status.code(), Some(2));
+}

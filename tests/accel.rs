@@ -1,0 +1,250 @@
+//! Every acceleration structure against brute force: the same closest hit and the same
+//! occlusion answer on random scenes and rays, and the same images of the course scenes.
+
+mod common;
+
+use glam::Vec3;
+use p3trace::accel::bvh::BvhBuild;
+use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
+use p3trace::ray::Ray;
+use p3trace::render::{render, RenderOptions};
+use p3trace::scene::p3f::parse_text;
+use p3trace::scene::{parse_file, Scene};
+use proptest::prelude::*;
+
+/// Every structure and option the renderer can run, but brute force.
+fn structures() -> Vec<AccelOptions> {
+    let base = AccelOptions {
+        shutter: [0.0, 1.0],
+        ..AccelOptions::default()
+    };
+    vec![
+        AccelOptions {
+            kind: AccelKind::Grid,
+            ..base
+        },
+        AccelOptions {
+            kind: AccelKind::Grid,
+            mailbox: true,
+            ..base
+        },
+        AccelOptions {
+            kind: AccelKind::Grid,
+            grid_density: 0.5,
+            ..base
+        },
+        AccelOptions {
+            kind: AccelKind::Bvh,
+            bvh: BvhBuild::Midpoint,
+            ..base
+        },
+        AccelOptions {
+            kind: AccelKind::Bvh,
+            bvh: BvhBuild::Sah,
+            ..base
+        },
+    ]
+}
+
+fn coord() -> impl Strategy<Value = f32> {
+    // Whole and half values make coincident faces, shared edges and exact ties common.
+    prop_oneof![(-8i32..=8).prop_map(|k| k as f32 / 2.0), -4.0f32..4.0,]
+}
+
+fn point() -> impl Strategy<Value = [f32; 3]> {
+    [coord(), coord(), coord()]
+}
+
+/// One primitive as P3F text.
+fn primitive() -> impl Strategy<Value = String> {
+    let fmt = |p: [f32; 3]| format!("{} {} {}", p[0], p[1], p[2]);
+    prop_oneof![
+        (point(), 0.0f32..1.5).prop_map(move |(c, r)| format!("s {} {r}", fmt(c))),
+        (point(), point(), 0.0f32..1.0, 0.0f32..0.5, 0.5f32..1.0)
+            .prop_map(move |(a, b, r, t0, t1)| format!("ms {} {} {r} {t0} {t1}", fmt(a), fmt(b))),
+        (point(), point(), point()).prop_map(move |(a, b, c)| format!(
+            "p 3\n{}\n{}\n{}",
+            fmt(a),
+            fmt(b),
+            fmt(c)
+        )),
+        // Degenerate triangles: repeated vertices, collinear ones.
+        (point(), point()).prop_map(move |(a, b)| format!(
+            "p 3\n{}\n{}\n{}",
+            fmt(a),
+            fmt(b),
+            fmt(b)
+        )),
+        (point(), point()).prop_map(move |(a, b)| {
+            let m = [0, 1, 2].map(|k| (a[k] + b[k]) / 2.0);
+            format!("p 3\n{}\n{}\n{}", fmt(a), fmt(m), fmt(b))
+        }),
+        (point(), point()).prop_map(move |(a, b)| {
+            let lo = [0, 1, 2].map(|k| a[k].min(b[k]));
+            let hi = [0, 1, 2].map(|k| a[k].max(b[k]));
+            format!("box {} {}", fmt(lo), fmt(hi))
+        }),
+        (point(), point(), 0.0f32..1.0, 0.0f32..1.0).prop_map(move |(a, b, ra, rb)| {
+            let b = if a == b { [b[0], b[1] + 1.0, b[2]] } else { b };
+            format!("c\n{} {ra}\n{} {rb}", fmt(a), fmt(b))
+        }),
+    ]
+}
+
+/// A scene of random primitives, some of them exact copies of others (ties), and now
+/// and then a plane.
+fn scene() -> impl Strategy<Value = Scene> {
+    (
+        prop::collection::vec(primitive(), 0..40),
+        prop::collection::vec(any::<prop::sample::Index>(), 0..4),
+        prop::option::of(point()),
+    )
+        .prop_map(|(prims, copies, plane)| {
+            let mut text = String::from("f 1 1 1 1 1 1 1 0 10 0 1\n");
+            for p in &prims {
+                text += p;
+                text += "\n";
+            }
+            if !prims.is_empty() {
+                for c in copies {
+                    text += c.get(&prims).as_str();
+                    text += "\n";
+                }
+            }
+            if let Some([a, b, c]) = plane {
+                text += &format!(
+                    "pl 0 {b} 0 1 {b} 0 0 {} {}\n",
+                    b + a.abs() + 0.5,
+                    c.abs() + 0.5
+                );
+            }
+            parse_text(&text).expect("the generated scene parses")
+        })
+}
+
+fn direction() -> impl Strategy<Value = Vec3> {
+    prop_oneof![
+        // Axis-aligned and diagonal directions put rays in slab planes (0 * inf).
+        (0usize..6).prop_map(|k| {
+            let mut d = Vec3::ZERO;
+            d[k / 2] = if k % 2 == 0 { 1.0 } else { -1.0 };
+            d
+        }),
+        [-1i32..=1, -1i32..=1, -1i32..=1]
+            .prop_filter("nonzero", |d| d != &[0, 0, 0])
+            .prop_map(|[x, y, z]| Vec3::new(x as f32, y as f32, z as f32).normalize()),
+        [-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0]
+            .prop_filter_map("nonzero", |[x, y, z]| Vec3::new(x, y, z).try_normalize()),
+    ]
+}
+
+fn ray() -> impl Strategy<Value = (Ray, f32)> {
+    (
+        point(),
+        direction(),
+        0.0f32..1.0,
+        prop_oneof![Just(f32::INFINITY), 0.1f32..12.0],
+    )
+        .prop_map(|(o, d, time, t_max)| {
+            let mut ray = Ray::new(Vec3::from_array(o), d);
+            ray.time = time;
+            (ray, t_max)
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn every_structure_answers_as_brute_force(
+        scene in scene(),
+        rays in prop::collection::vec(ray(), 1..48),
+    ) {
+        let g = &scene.geometry;
+        let brute = Tracer::new(g, Accel::None);
+        for options in structures() {
+            let (accel, _) = Accel::build(g, &options);
+            let name = accel.name();
+            let tracer = Tracer::new(g, accel);
+            for (ray, t_max) in &rays {
+                for t_min in [0.0, 1e-4] {
+                    let expected = brute.closest(ray, t_min, *t_max);
+                    let got = tracer.closest(ray, t_min, *t_max);
+                    prop_assert_eq!(got, expected, "{} closest, {:?} t_max {}", name, ray, t_max);
+                    prop_assert_eq!(
+                        tracer.occluded(ray, t_min, *t_max),
+                        brute.occluded(ray, t_min, *t_max),
+                        "{} occluded, {:?} t_max {}", name, ray, t_max
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn empty_and_single_object_scenes() {
+    for text in [
+        "",
+        "s 0 0 0 1",
+        "pl 0 0 0 1 0 0 0 0 1",
+        "p 3\n0 0 0\n0 0 0\n0 0 0",
+    ] {
+        let scene = parse_text(text).unwrap();
+        let g = &scene.geometry;
+        let ray = Ray::new(Vec3::new(0.0, 5.0, 0.0), Vec3::NEG_Y);
+        let expected = Tracer::new(g, Accel::None).closest(&ray, 0.0, f32::INFINITY);
+        for options in structures() {
+            let tracer = Tracer::new(g, Accel::build(g, &options).0);
+            assert_eq!(tracer.closest(&ray, 0.0, f32::INFINITY), expected, "{text}");
+        }
+    }
+}
+
+/// Renders at a small size with each structure; brute force is skipped above this many
+/// objects (the dragon), where the two BVHs and the grids are compared with each other.
+const BRUTE_FORCE_LIMIT: usize = 50_000;
+
+#[test]
+fn course_scenes_give_the_same_image_with_every_structure() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let mut names: Vec<String> = std::fs::read_dir(shared.join("scenes"))
+        .unwrap()
+        .filter_map(|e| {
+            let path = e.unwrap().path();
+            (path.extension()? == "p3f").then(|| path.file_stem().unwrap().to_string_lossy().into())
+        })
+        .collect();
+    names.sort();
+    assert_eq!(names.len(), 10, "{names:?}");
+    for name in names {
+        let scene = parse_file(&shared.join(format!("scenes/{name}.p3f"))).unwrap();
+        let mut options = RenderOptions::from_scene(&scene);
+        (options.width, options.height) = (64, 48);
+        options.skybox = false;
+        let mut reference: Option<(String, Vec<u8>)> = None;
+        let mut kinds = vec![AccelOptions {
+            kind: AccelKind::None,
+            ..AccelOptions::default()
+        }];
+        if scene.geometry.bounded_count() > BRUTE_FORCE_LIMIT {
+            kinds.clear();
+        }
+        kinds.extend(structures());
+        for accel in kinds {
+            options.accel = accel;
+            let report = render(&scene, &options).unwrap();
+            let bytes = report.film.to_rgb8();
+            match &reference {
+                None => reference = Some((report.accel_name, bytes)),
+                Some((first, expected)) => assert!(
+                    &bytes == expected,
+                    "{name}: {} differs from {first}",
+                    report.accel_name
+                ),
+            }
+        }
+    }
+}
