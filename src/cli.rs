@@ -31,6 +31,12 @@ pub enum Command {
     },
     /// Print how two images differ; exit 1 when too few pixels are within the tolerance.
     Compare(CompareArgs),
+    /// Time the primary, shadow and reflection rays of the benchmark protocol
+    /// (../shared/bench/PROTOCOL.md) with 1 thread and with all, printing
+    /// `ray-set api threads rays hits tsum mrays_per_s` lines that compare with Embree's.
+    /// The structure is the BVH unless --accel names another: the file's `accel` line
+    /// is not read here.
+    Bench(BenchArgs),
     /// Write one of the project's generated scenes as P3F, or its procedural skybox.
     #[command(subcommand)]
     Gen(GenCommand),
@@ -181,6 +187,22 @@ pub struct RenderArgs {
     /// Also print the structure's build time and statistics.
     #[arg(long, conflicts_with = "quiet")]
     pub stats: bool,
+    #[command(flatten)]
+    pub accel: AccelArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// The P3F scene file.
+    pub scene: PathBuf,
+    /// Threads of the multi-threaded runs (a 1-thread run always comes first).
+    /// Default: one per core.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub threads: Option<u32>,
+    /// Passes over each ray set; the fastest is reported.
+    #[arg(long, value_name = "N", default_value_t = 7,
+          value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub reps: u32,
     #[command(flatten)]
     pub accel: AccelArgs,
 }

@@ -9,12 +9,14 @@
 //! - [`accel`] finds closest hits and answers occlusion queries over a scene.
 //! - [`render`] turns a scene into an image: camera, Whitted shading, skybox, tiles, film.
 //! - [`compare`] measures how two images differ.
+//! - [`bench`] runs the trace-throughput protocol of `../shared/bench/PROTOCOL.md`.
 
 // Tests like `!(x > 0.0)` are deliberate: they must also reject NaN, which `x <= 0.0` lets
 // through.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
+pub mod bench;
 pub mod compare;
 pub mod intersect;
 pub mod output;

@@ -10,8 +10,8 @@ use std::process::ExitCode;
 use clap::Parser;
 
 use cli::{
-    AccelArgs, AccelChoice, BvhChoice, Cli, Command, CompareArgs, GenCommand, RenderArgs,
-    SceneOutput, UpAxis,
+    AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand,
+    RenderArgs, SceneOutput, UpAxis,
 };
 use p3trace::accel::bvh::BvhBuild;
 use p3trace::accel::{Accel, AccelKind, AccelOptions};
@@ -36,6 +36,7 @@ fn main() -> ExitCode {
         Command::Info { scene, accel } => run_info(&scene, &accel),
         Command::Compare(args) => run_compare(&args),
         Command::Gen(command) => run_gen(command),
+        Command::Bench(args) => run_bench(&args),
     };
     match result {
         Ok(code) => code,
@@ -128,9 +129,7 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
 /// on stderr when the file's `accel 0` would make a large scene slow.
 fn accel_options(scene: &Scene, args: &AccelArgs) -> AccelOptions {
     let kind = match args.accel {
-        Some(AccelChoice::None) => AccelKind::None,
-        Some(AccelChoice::Grid) => AccelKind::Grid,
-        Some(AccelChoice::Bvh) => AccelKind::Bvh,
+        Some(choice) => accel_kind(choice),
         None => {
             let objects = scene.geometry.bounded_count();
             if scene.accel == Some(AccelKind::None) && objects > SLOW_WITHOUT_ACCEL {
@@ -143,6 +142,11 @@ fn accel_options(scene: &Scene, args: &AccelArgs) -> AccelOptions {
             scene.accel.unwrap_or(AccelKind::Bvh)
         }
     };
+    structure_options(kind, args)
+}
+
+/// The options of structure `kind`, with the build settings of `args`.
+fn structure_options(kind: AccelKind, args: &AccelArgs) -> AccelOptions {
     AccelOptions {
         kind,
         bvh: match args.bvh {
@@ -152,6 +156,14 @@ fn accel_options(scene: &Scene, args: &AccelArgs) -> AccelOptions {
         grid_density: args.grid_density,
         mailbox: args.mailbox,
         ..AccelOptions::default()
+    }
+}
+
+fn accel_kind(choice: AccelChoice) -> AccelKind {
+    match choice {
+        AccelChoice::None => AccelKind::None,
+        AccelChoice::Grid => AccelKind::Grid,
+        AccelChoice::Bvh => AccelKind::Bvh,
     }
 }
 
@@ -233,6 +245,72 @@ fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
         return Ok(ExitCode::from(1));
     }
     println!("match");
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
+    use p3trace::bench;
+    let scene = load_scene(&args.scene)?;
+    // A benchmark times a structure: the file's `accel` line (brute force in every
+    // course file) is not a choice made for it, so the default is the BVH.
+    let kind = args.accel.accel.map_or(AccelKind::Bvh, accel_kind);
+    let options = structure_options(kind, &args.accel);
+    let (accel, build_time) = Accel::build(&scene.geometry, &options);
+    let name = accel.name();
+    let tracer = p3trace::accel::Tracer::new(&scene.geometry, accel);
+    let sets = bench::ray_sets(&scene, &tracer);
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = args.threads.map_or(cores, |n| n as usize);
+    let (width, height) = bench::resolution(&scene);
+    println!("# p3trace bench: trace-throughput protocol (PROTOCOL.md)");
+    println!("# scene {}", scene.name);
+    println!(
+        "# geometry {} bounded objects, {} planes, {} lights",
+        scene.geometry.bounded_count(),
+        scene.geometry.count(p3trace::ray::PrimKind::Plane),
+        scene.lights.len()
+    );
+    println!(
+        "# resolution {width}x{height} (scene {}x{})",
+        scene.camera.width, scene.camera.height
+    );
+    println!(
+        "# structure {name}, build_s {:.4}",
+        build_time.as_secs_f64()
+    );
+    println!(
+        "# cpu {}, {cores} logical CPUs; best of {} passes",
+        bench::cpu_model(),
+        args.reps
+    );
+    println!("# ray-set  api  threads  rays  hits  tsum  mrays_per_s");
+    let mut thread_counts = vec![1];
+    if threads > 1 {
+        thread_counts.push(threads);
+    }
+    let mut first: Vec<bench::SetResult> = Vec::new();
+    for &n in &thread_counts {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map_err(|e| Failure::Run(format!("cannot start the worker threads: {e}")))?;
+        for (k, set) in sets.iter().enumerate() {
+            let r = bench::trace_set(&tracer, set, &pool, args.reps).map_err(Failure::Run)?;
+            println!("{}", bench::line(set, "p3trace-single", n, &r));
+            // The best of the paths above: one path today.
+            println!("{}", bench::line(set, "p3trace-best", n, &r));
+            match first.get(k) {
+                None => first.push(r),
+                Some(one) if (one.hits, one.tsum) == (r.hits, r.tsum) => {}
+                Some(one) => {
+                    return Err(Failure::Run(format!(
+                        "{}: {n} threads gave hits {} tsum {:.3}, 1 thread hits {} tsum {:.3}",
+                        set.name, r.hits, r.tsum, one.hits, one.tsum
+                    )))
+                }
+            }
+        }
+    }
     Ok(ExitCode::SUCCESS)
 }
 

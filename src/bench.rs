@@ -1,0 +1,311 @@
+//! The trace-throughput protocol of `../shared/bench/PROTOCOL.md`: the same primary,
+//! shadow and reflection rays that Embree is timed on, traced here, with checksums (hits
+//! and the sum of `t`) that let the two be checked against each other.
+
+use std::time::{Duration, Instant};
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::accel::Tracer;
+use crate::ray::{PrimKind, Ray};
+use crate::scene::{Light, Scene};
+
+/// The protocol's image width; the height follows the scene's aspect ratio.
+pub const WIDTH: u32 = 1024;
+/// Secondary rays start this far off the surface, along the normal facing the ray.
+pub const OFFSET: f64 = 1e-4;
+/// Rays handed to a thread at a time.
+const CHUNK: usize = 1024;
+
+/// One of the protocol's ray sets.
+#[derive(Clone, Debug)]
+pub struct RaySet {
+    pub name: &'static str,
+    pub rays: Vec<Ray>,
+    /// Each ray's `t_max` (`t_min` is 0 for every ray).
+    pub t_max: Vec<f32>,
+    /// Occlusion queries rather than closest hits.
+    pub occlusion: bool,
+}
+
+/// What one pass over a set found, and the fastest pass.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SetResult {
+    pub hits: u64,
+    pub tsum: f64,
+    pub best: Duration,
+}
+
+impl SetResult {
+    pub fn mrays_per_s(&self, rays: usize) -> f64 {
+        rays as f64 / self.best.as_secs_f64().max(1e-12) / 1e6
+    }
+}
+
+/// The image size of the protocol for `scene`.
+pub fn resolution(scene: &Scene) -> (u32, u32) {
+    let c = &scene.camera;
+    let h = (WIDTH as f64 * c.height as f64 / c.width as f64).round();
+    (WIDTH, (h as u32).max(1))
+}
+
+/// The three ray sets of the protocol: primary rays through every pixel centre (bottom
+/// row first), then, from each primary hit, shadow rays to the lights in front of the
+/// surface and one mirror reflection ray. Secondary rays are made in double precision,
+/// as the Embree harness makes them.
+pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
+    let (width, height) = resolution(scene);
+    let mut primary = RaySet {
+        name: "primary",
+        rays: Vec::with_capacity((width * height) as usize),
+        t_max: vec![f32::INFINITY; (width * height) as usize],
+        occlusion: false,
+    };
+    // The pinhole camera of P3F.md section 3 in double precision (aperture and focal
+    // play no part), so that the rays round to the same floats as the Embree harness's.
+    let c = &scene.camera;
+    let (from, at, up) = (c.from.as_dvec3(), c.at.as_dvec3(), c.up.as_dvec3());
+    let n = (from - at).normalize();
+    let d = (from - at).length();
+    let u = up.cross(n).normalize();
+    let v = n.cross(u);
+    let h = 2.0 * d * (c.angle as f64 * std::f64::consts::PI / 360.0).tan();
+    let w = c.width as f64 / c.height as f64 * h;
+    for y in 0..height {
+        for x in 0..width {
+            let sx = (x as f64 + 0.5) / width as f64 - 0.5;
+            let sy = (y as f64 + 0.5) / height as f64 - 0.5;
+            let dir = u * (w * sx) + v * (h * sy) - n * d;
+            let ray = Ray::new(from.as_vec3(), dir.normalize().as_vec3());
+            primary.rays.push(ray);
+        }
+    }
+    let lights: Vec<DVec3> = scene
+        .lights
+        .iter()
+        .map(|l| match *l {
+            Light::Point { position, .. } => position.as_dvec3(),
+            Light::Area { centre, .. } => centre.as_dvec3(),
+        })
+        .collect();
+    let mut shadow = RaySet {
+        name: "shadow",
+        rays: Vec::new(),
+        t_max: Vec::new(),
+        occlusion: true,
+    };
+    let mut reflection = RaySet {
+        name: "reflection",
+        rays: Vec::new(),
+        t_max: Vec::new(),
+        occlusion: false,
+    };
+    let g = tracer.geometry;
+    for ray in &primary.rays {
+        let Some(hit) = tracer.closest(ray, 0.0, f32::INFINITY) else {
+            continue;
+        };
+        let d = ray.dir.as_dvec3();
+        let p = ray.origin.as_dvec3() + d * hit.t as f64;
+        // Geometric normals (not the interpolated ones of smooth triangles), in double
+        // precision where the harness works in double: a small sphere turns an error
+        // in the hit point into a large one in its normal.
+        let i = hit.prim.index();
+        let normal = match hit.prim.kind() {
+            PrimKind::Sphere => {
+                let s = &g.spheres;
+                (p - s.centre.get(i).as_dvec3()) / s.radius[i] as f64
+            }
+            PrimKind::MovingSphere => {
+                let s = &g.moving_spheres;
+                (p - s.centre_at(i, 0.0).as_dvec3()) / s.radius[i] as f64
+            }
+            PrimKind::Triangle => {
+                let t = &g.triangles;
+                t.e1.get(i).cross(t.e2.get(i)).as_dvec3().normalize()
+            }
+            _ => g
+                .normal(hit.prim, p.as_vec3(), hit.u, hit.v, 0.0)
+                .as_dvec3(),
+        };
+        let facing = if normal.dot(d) < 0.0 { normal } else { -normal };
+        let origin = p + facing * OFFSET;
+        for &light in &lights {
+            if facing.dot(light - p) <= 0.0 {
+                continue;
+            }
+            let to_light = light - origin;
+            shadow
+                .rays
+                .push(Ray::new(origin.as_vec3(), to_light.normalize().as_vec3()));
+            shadow.t_max.push(to_light.length() as f32);
+        }
+        let mirror = d - facing * (2.0 * d.dot(facing));
+        reflection
+            .rays
+            .push(Ray::new(origin.as_vec3(), mirror.normalize().as_vec3()));
+        reflection.t_max.push(f32::INFINITY);
+    }
+    [primary, shadow, reflection]
+}
+
+/// Traces `set` `reps` times on `pool` and returns the checksums and the fastest pass.
+/// Every pass must give the same checksums; a pass that does not is an error.
+pub fn trace_set(
+    tracer: &Tracer,
+    set: &RaySet,
+    pool: &rayon::ThreadPool,
+    reps: u32,
+) -> Result<SetResult, String> {
+    // Per ray: the hit's t, 0 for an occluded shadow ray, -1 for a miss.
+    let mut answers = vec![f32::NAN; set.rays.len()];
+    let mut result: Option<SetResult> = None;
+    for pass in 1..=reps.max(1) {
+        answers.fill(f32::NAN);
+        let start = Instant::now();
+        pool.install(|| {
+            answers
+                .par_chunks_mut(CHUNK)
+                .zip(set.rays.par_chunks(CHUNK))
+                .zip(set.t_max.par_chunks(CHUNK))
+                .for_each(|((answers, rays), t_max)| {
+                    for ((answer, ray), &t_max) in answers.iter_mut().zip(rays).zip(t_max) {
+                        *answer = if set.occlusion {
+                            if tracer.occluded(ray, 0.0, t_max) {
+                                0.0
+                            } else {
+                                -1.0
+                            }
+                        } else {
+                            tracer.closest(ray, 0.0, t_max).map_or(-1.0, |h| h.t)
+                        };
+                    }
+                });
+        });
+        let elapsed = start.elapsed();
+        let (hits, tsum) = checksum(&answers);
+        match &mut result {
+            None => {
+                result = Some(SetResult {
+                    hits,
+                    tsum,
+                    best: elapsed,
+                })
+            }
+            Some(r) if r.hits == hits && r.tsum == tsum => r.best = r.best.min(elapsed),
+            Some(r) => {
+                return Err(format!(
+                    "{}: pass {pass} gave hits {hits} tsum {tsum:.3}, pass 1 hits {} tsum {:.3}",
+                    set.name, r.hits, r.tsum
+                ))
+            }
+        }
+    }
+    Ok(result.expect("at least one pass ran"))
+}
+
+/// Hits and the sum of their `t`, summed in ray order in double precision.
+fn checksum(answers: &[f32]) -> (u64, f64) {
+    answers
+        .iter()
+        .filter(|&&t| t >= 0.0)
+        .fold((0, 0.0), |(hits, sum), &t| (hits + 1, sum + t as f64))
+}
+
+/// One result line: `ray-set api threads rays hits tsum mrays_per_s`.
+pub fn line(set: &RaySet, api: &str, threads: usize, r: &SetResult) -> String {
+    format!(
+        "{:<10}  {:<14}  {:2}  {:8}  {:8}  {:16.3}  {:8.2}",
+        set.name,
+        api,
+        threads,
+        set.rays.len(),
+        r.hits,
+        r.tsum,
+        r.mrays_per_s(set.rays.len())
+    )
+}
+
+/// The CPU's model name, for the comment lines.
+pub fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|info| {
+            info.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, name)| name.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown".into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::Accel;
+    use crate::scene::p3f::parse_text;
+    use glam::Vec3;
+
+    const SCENE: &str = "v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0.01\n\
+        resolution 64 32\naperture 3\nfocal 2\nl 0 5 5\nl 0 -5 -5\ns 0 0 0 1\n";
+
+    #[test]
+    fn sets_follow_the_protocol() {
+        let scene = parse_text(SCENE).unwrap();
+        assert_eq!(resolution(&scene), (1024, 512));
+        let tracer = Tracer::new(&scene.geometry, Accel::None);
+        let [primary, shadow, reflection] = ray_sets(&scene, &tracer);
+        assert_eq!(primary.rays.len(), 1024 * 512);
+        // Primary rays start at the eye (aperture ignored) and are unit length.
+        assert!(primary
+            .rays
+            .iter()
+            .all(|r| r.origin == Vec3::new(0.0, 0.0, 5.0)));
+        assert!(primary
+            .rays
+            .iter()
+            .all(|r| (r.dir.length() - 1.0).abs() < 1e-6));
+        let hits = primary
+            .rays
+            .iter()
+            .filter(|r| tracer.closest(r, 0.0, f32::INFINITY).is_some())
+            .count();
+        assert!(hits > 0);
+        assert_eq!(reflection.rays.len(), hits);
+        // Each hit sends a shadow ray to each light above its tangent plane: none at
+        // the sides of the sphere, two near the bottom rim.
+        let n = shadow.rays.len();
+        assert!(n > hits / 2 && n < 2 * hits, "{n} shadow rays, {hits} hits");
+        let lights = [Vec3::new(0.0, 5.0, 5.0), Vec3::new(0.0, -5.0, -5.0)];
+        for (ray, &t_max) in shadow.rays.iter().zip(&shadow.t_max) {
+            let end = ray.at(t_max);
+            assert!(lights.iter().any(|l| end.distance(*l) < 1e-3), "{end}");
+            assert!(ray.origin.length() > 1.0, "starts off the surface");
+        }
+        // A mirror ray off a sphere seen from outside points away from it.
+        for r in &reflection.rays {
+            assert!(r.dir.dot(r.origin) > -1e-3);
+        }
+    }
+
+    #[test]
+    fn checksums_count_hits_and_sum_t() {
+        assert_eq!(checksum(&[-1.0, 2.5, 0.0, 1.5]), (3, 4.0));
+        let scene = parse_text(SCENE).unwrap();
+        let tracer = Tracer::new(&scene.geometry, Accel::None);
+        let sets = ray_sets(&scene, &tracer);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let primary = trace_set(&tracer, &sets[0], &pool, 2).unwrap();
+        assert_eq!(primary.hits as usize, sets[2].rays.len());
+        let shadow = trace_set(&tracer, &sets[1], &pool, 1).unwrap();
+        assert_eq!(
+            shadow.hits, 0,
+            "nothing stands between the sphere and its light"
+        );
+        assert_eq!(shadow.tsum, 0.0);
+    }
+}
