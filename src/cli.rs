@@ -218,6 +218,11 @@ pub struct AccelArgs {
     /// course report's: longest-axis midpoint, leaves of at most two objects).
     #[arg(long, value_enum, value_name = "BUILD", default_value_t = BvhChoice::Sah)]
     pub bvh: BvhChoice,
+    /// Children per BVH node during traversal: 2 (the tree as built) or 8 (collapsed to
+    /// 8-wide nodes whose boxes one ray tests together). Default: 8 for sah, 2 for
+    /// midpoint (the report's binary traversal).
+    #[arg(long, value_name = "N", value_parser = parse_bvh_width)]
+    pub bvh_width: Option<u32>,
     /// The grid's density m: floor(m * w * (N / V)^(1/3)) + 1 cells along an axis of
     /// width w, for N objects in a box of volume V.
     #[arg(long, value_name = "M", default_value_t = 2.0, value_parser = parse_density)]
@@ -241,6 +246,14 @@ pub enum AccelChoice {
 pub enum BvhChoice {
     Sah,
     Midpoint,
+}
+
+fn parse_bvh_width(text: &str) -> Result<u32, String> {
+    match text {
+        "2" => Ok(2),
+        "8" => Ok(8),
+        _ => Err(format!("'{text}': the BVH width is 2 or 8")),
+    }
 }
 
 fn parse_density(text: &str) -> Result<f32, String> {

@@ -13,7 +13,7 @@ use cli::{
     AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand,
     RenderArgs, SceneOutput, UpAxis,
 };
-use p3trace::accel::bvh::BvhBuild;
+use p3trace::accel::bvh::{BvhBuild, BvhWidth};
 use p3trace::accel::{Accel, AccelKind, AccelOptions};
 use p3trace::ray::PrimKind;
 use p3trace::render::film::OutputFormat;
@@ -153,6 +153,10 @@ fn structure_options(kind: AccelKind, args: &AccelArgs) -> AccelOptions {
             BvhChoice::Sah => BvhBuild::Sah,
             BvhChoice::Midpoint => BvhBuild::Midpoint,
         },
+        bvh_width: args.bvh_width.map(|n| match n {
+            2 => BvhWidth::Two,
+            _ => BvhWidth::Eight,
+        }),
         grid_density: args.grid_density,
         mailbox: args.mailbox,
         ..AccelOptions::default()

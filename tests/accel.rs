@@ -4,7 +4,7 @@
 mod common;
 
 use glam::Vec3;
-use p3trace::accel::bvh::BvhBuild;
+use p3trace::accel::bvh::{BvhBuild, BvhWidth};
 use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
 use p3trace::ray::Ray;
 use p3trace::render::{render, RenderOptions};
@@ -41,6 +41,18 @@ fn structures() -> Vec<AccelOptions> {
         AccelOptions {
             kind: AccelKind::Bvh,
             bvh: BvhBuild::Sah,
+            ..base
+        },
+        AccelOptions {
+            kind: AccelKind::Bvh,
+            bvh: BvhBuild::Sah,
+            bvh_width: Some(BvhWidth::Two),
+            ..base
+        },
+        AccelOptions {
+            kind: AccelKind::Bvh,
+            bvh: BvhBuild::Midpoint,
+            bvh_width: Some(BvhWidth::Eight),
             ..base
         },
     ]

@@ -17,6 +17,7 @@
 use glam::Vec3;
 
 use super::bounds::{prim_bounds, Aabb};
+use super::wide::Bvh8;
 use super::{ClosestHit, BOUNDED};
 use crate::ray::{PrimId, Ray};
 use crate::scene::Geometry;
@@ -26,6 +27,25 @@ use crate::scene::Geometry;
 pub enum BvhBuild {
     Midpoint,
     Sah,
+}
+
+/// Children per node that traversal sees: the binary tree as built, or the tree
+/// collapsed to 8-wide nodes ([`Bvh8`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BvhWidth {
+    Two,
+    Eight,
+}
+
+impl BvhBuild {
+    /// The SAH tree is collapsed to 8-wide nodes; the report's BVH stays binary, as the
+    /// report traverses it.
+    pub fn default_width(self) -> BvhWidth {
+        match self {
+            BvhBuild::Midpoint => BvhWidth::Two,
+            BvhBuild::Sah => BvhWidth::Eight,
+        }
+    }
 }
 
 /// The most primitives in an SAH leaf (a leaf can later be tested 8 at a time).
@@ -39,7 +59,9 @@ const BINS: usize = 16;
 /// Below this depth a build may split as it likes; deeper, it splits at the median so
 /// the depth stays under [`STACK_SIZE`] whatever the input.
 const FREE_DEPTH: usize = 64;
-const STACK_SIZE: usize = 128;
+/// No tree is deeper: past [`FREE_DEPTH`] median splits halve the primitives.
+pub const MAX_DEPTH: usize = 128;
+const STACK_SIZE: usize = MAX_DEPTH;
 
 /// A node: its box, and either two children or a run of primitives.
 /// Two nodes fill a 64-byte cache line.
@@ -57,11 +79,29 @@ pub struct Node {
 const _: () = assert!(std::mem::size_of::<Node>() == 32);
 
 impl Node {
-    fn bounds(&self) -> Aabb {
+    pub(super) fn bounds(&self) -> Aabb {
         Aabb {
             min: Vec3::from_array(self.min),
             max: Vec3::from_array(self.max),
         }
+    }
+
+    pub(super) fn area(&self) -> f32 {
+        self.bounds().area()
+    }
+
+    pub(super) fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+
+    /// A leaf's primitives, as indices into the tree's primitive order.
+    pub(super) fn prim_range(&self) -> std::ops::Range<usize> {
+        self.offset as usize..(self.offset + self.count) as usize
+    }
+
+    /// An interior node's right child (its left child follows it).
+    pub(super) fn right_child(&self) -> usize {
+        self.offset as usize
     }
 
     /// The entry distance of the ray into the node's box within `(t_min, t_max]`.
@@ -86,6 +126,8 @@ pub struct Bvh {
     nodes: Vec<Node>,
     prims: Vec<PrimId>,
     build: BvhBuild,
+    /// The tree collapsed to 8-wide nodes, which traversal then uses.
+    wide: Option<Bvh8>,
 }
 
 /// A primitive during the build.
@@ -97,7 +139,7 @@ struct Item {
 }
 
 impl Bvh {
-    pub fn build(geometry: &Geometry, build: BvhBuild, shutter: [f32; 2]) -> Bvh {
+    pub fn build(geometry: &Geometry, build: BvhBuild, width: BvhWidth, shutter: [f32; 2]) -> Bvh {
         let mut items = Vec::with_capacity(geometry.bounded_count());
         for kind in BOUNDED {
             for prim in geometry.ids(kind) {
@@ -115,17 +157,33 @@ impl Bvh {
         if !items.is_empty() {
             grow(&mut nodes, &mut items, 0, 0, build);
         }
+        let prims: Vec<PrimId> = items.iter().map(|it| it.prim).collect();
+        let wide = match width {
+            BvhWidth::Two => None,
+            BvhWidth::Eight => Bvh8::collapse(&nodes, &prims),
+        };
         Bvh {
             nodes,
-            prims: items.iter().map(|it| it.prim).collect(),
+            prims,
             build,
+            wide,
         }
     }
 
+    /// The 8-wide tree that traversal uses, when the tree was collapsed.
+    pub fn wide(&self) -> Option<&Bvh8> {
+        self.wide.as_ref()
+    }
+
     pub fn name(&self) -> String {
-        match self.build {
-            BvhBuild::Midpoint => "bvh midpoint".into(),
-            BvhBuild::Sah => "bvh sah".into(),
+        let build = match self.build {
+            BvhBuild::Midpoint => "bvh midpoint",
+            BvhBuild::Sah => "bvh sah",
+        };
+        match (self.build.default_width(), &self.wide) {
+            (BvhWidth::Two, None) | (BvhWidth::Eight, Some(_)) => build.into(),
+            (_, Some(_)) => format!("{build} 8-wide"),
+            (_, None) => format!("{build} binary"),
         }
     }
 
@@ -137,6 +195,9 @@ impl Bvh {
         t_min: f32,
         closest: &mut ClosestHit,
     ) {
+        if let Some(wide) = &self.wide {
+            return wide.closest(geometry, ray, inv_dir, t_min, closest);
+        }
         let Some(root) = self.nodes.first() else {
             return;
         };
@@ -193,6 +254,9 @@ impl Bvh {
         t_min: f32,
         t_max: f32,
     ) -> bool {
+        if let Some(wide) = &self.wide {
+            return wide.occluded(geometry, ray, inv_dir, t_min, t_max);
+        }
         if self.nodes.is_empty() {
             return false;
         }
@@ -231,7 +295,7 @@ impl Bvh {
         let leaf_prims: usize = leaves.iter().map(|n| n.count as usize).sum();
         let max_leaf = leaves.iter().map(|n| n.count).max().unwrap_or(0);
         let memory = std::mem::size_of_val(&self.nodes[..]) + 4 * self.prims.len();
-        vec![
+        let mut lines = vec![
             format!("bvh build: {}", self.name().trim_start_matches("bvh ")),
             format!(
                 "nodes: {} ({} interior, {} leaves), depth {}",
@@ -247,7 +311,16 @@ impl Bvh {
             ),
             format!("sah cost: {:.2}", self.sah_cost()),
             format!("memory: {:.2} MiB", memory as f64 / (1 << 20) as f64),
-        ]
+        ];
+        if let Some(wide) = &self.wide {
+            lines.push(format!(
+                "8-wide: {} nodes, depth {}, {:.2} MiB",
+                wide.node_count(),
+                wide.depth(),
+                wide.memory() as f64 / (1 << 20) as f64
+            ));
+        }
+        lines
     }
 
     /// The number of nodes on the longest path from the root to a leaf.

@@ -12,6 +12,7 @@ pub mod bounds;
 pub mod bvh;
 pub mod grid;
 mod none;
+pub mod wide;
 
 use std::time::{Duration, Instant};
 
@@ -20,7 +21,7 @@ use glam::Vec3;
 use crate::ray::{Hit, PrimId, PrimKind, Ray};
 pub use crate::scene::AccelKind;
 use crate::scene::Geometry;
-use bvh::{Bvh, BvhBuild};
+use bvh::{Bvh, BvhBuild, BvhWidth};
 use grid::Grid;
 
 /// The bounded primitive kinds, in [`PrimId`] order.
@@ -47,6 +48,8 @@ pub enum Accel {
 pub struct AccelOptions {
     pub kind: AccelKind,
     pub bvh: BvhBuild,
+    /// The BVH's node width; `None` takes the build's default.
+    pub bvh_width: Option<BvhWidth>,
     /// The grid's `m`: cells per axis grow as `m * w_i * (N / V)^(1/3)`.
     pub grid_density: f32,
     /// Test an object that spans several grid cells only once per ray.
@@ -60,6 +63,7 @@ impl Default for AccelOptions {
         AccelOptions {
             kind: AccelKind::Bvh,
             bvh: BvhBuild::Sah,
+            bvh_width: None,
             grid_density: grid::DEFAULT_DENSITY,
             mailbox: false,
             shutter: [0.0, 0.0],
@@ -74,12 +78,16 @@ impl Accel {
         let accel = match options.kind {
             AccelKind::None => Accel::None,
             AccelKind::Grid => Accel::Grid(Grid::build(geometry, options)),
-            AccelKind::Bvh => Accel::Bvh(Bvh::build(geometry, options.bvh, options.shutter)),
+            AccelKind::Bvh => {
+                let width = options.bvh_width.unwrap_or(options.bvh.default_width());
+                Accel::Bvh(Bvh::build(geometry, options.bvh, width, options.shutter))
+            }
         };
         (accel, start.elapsed())
     }
 
-    /// A short name: `none`, `grid`, `grid+mailbox`, `bvh midpoint`, `bvh sah`.
+    /// A short name: `none`, `grid`, `grid+mailbox`, `bvh midpoint`, `bvh sah`, with the
+    /// BVH's width when it is not the build's default (`bvh sah binary`).
     pub fn name(&self) -> String {
         match self {
             Accel::None => "none".into(),
