@@ -181,6 +181,10 @@ pub struct RenderArgs {
     /// Seed of the random numbers of jittered sampling and the thin lens.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
+    /// How rays travel: packet (primary rays and their shadow rays eight at a time) or
+    /// scalar (one at a time, the reference). Both give the same image byte for byte.
+    #[arg(long, value_enum, value_name = "MODE", default_value_t = ModeChoice::Packet)]
+    pub mode: ModeChoice,
     /// No progress bar and no closing statistics line (warnings still go to stderr).
     #[arg(short, long)]
     pub quiet: bool,
@@ -230,6 +234,12 @@ pub struct AccelArgs {
     /// Grid only: test an object that spans several cells once per ray (mailboxing).
     #[arg(long)]
     pub mailbox: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ModeChoice {
+    Packet,
+    Scalar,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

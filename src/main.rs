@@ -11,13 +11,13 @@ use clap::Parser;
 
 use cli::{
     AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand,
-    RenderArgs, SceneOutput, UpAxis,
+    ModeChoice, RenderArgs, SceneOutput, UpAxis,
 };
 use p3trace::accel::bvh::{BvhBuild, BvhWidth};
 use p3trace::accel::{Accel, AccelKind, AccelOptions};
 use p3trace::ray::PrimKind;
 use p3trace::render::film::OutputFormat;
-use p3trace::render::{self, RenderOptions, Sampling};
+use p3trace::render::{self, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::generate::{dragon, mountain, random, skybox, sphereflake};
 use p3trace::scene::{self, Light, Scene};
 
@@ -89,6 +89,10 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     options.skybox = !args.no_skybox;
     options.threads = args.threads.map(|n| n as usize);
     options.seed = args.seed;
+    options.mode = match args.mode {
+        ModeChoice::Packet => RenderMode::Packet,
+        ModeChoice::Scalar => RenderMode::Scalar,
+    };
     options.progress = !args.quiet && std::io::stderr().is_terminal();
     options.accel = accel_options(&scene, &args.accel);
     options.check_size().map_err(Failure::Usage)?;

@@ -193,6 +193,23 @@ impl<'s> Tracer<'s> {
             }
     }
 
+    /// The closest hit of each ray of `rays` whose bit is set in `active`, with `t` in
+    /// `(0, t_max)`; `None` for the other lanes.
+    pub fn closest_packet(&self, rays: &[Ray; 8], active: u8, t_max: f32) -> [Option<Hit>; 8] {
+        std::array::from_fn(|k| {
+            (active & (1 << k) != 0)
+                .then(|| self.closest(&rays[k], 0.0, t_max))
+                .flatten()
+        })
+    }
+
+    /// The lanes of `active` whose ray is blocked within `(0, t_max[k])`, as a bit mask.
+    pub fn occluded_packet(&self, rays: &[Ray; 8], t_max: &[f32; 8], active: u8) -> u8 {
+        (0..8)
+            .filter(|&k| active & (1 << k) != 0 && self.occluded(&rays[k], 0.0, t_max[k]))
+            .fold(0, |mask, k| mask | 1 << k)
+    }
+
     fn closest_plane(&self, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
         let mut closest = ClosestHit::new(t_max);
         for prim in self.geometry.ids(PrimKind::Plane) {

@@ -67,6 +67,16 @@ impl Sampling {
     }
 }
 
+/// How rays travel through the structures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RenderMode {
+    /// One ray at a time: the reference path.
+    Scalar,
+    /// Primary rays and their shadow rays as packets of eight (4 x 2 pixels); deeper rays
+    /// one at a time. The image is the scalar one, byte for byte.
+    Packet,
+}
+
 #[derive(Clone, Debug)]
 pub struct RenderOptions {
     pub width: u32,
@@ -82,6 +92,7 @@ pub struct RenderOptions {
     pub progress: bool,
     /// The acceleration structure and how to build it.
     pub accel: AccelOptions,
+    pub mode: RenderMode,
 }
 
 impl RenderOptions {
@@ -100,6 +111,7 @@ impl RenderOptions {
                 kind: scene.accel.unwrap_or(AccelKind::Bvh),
                 ..AccelOptions::default()
             },
+            mode: RenderMode::Packet,
         }
     }
 
@@ -234,6 +246,10 @@ fn tiles(width: u32, height: u32) -> Vec<Tile> {
     tiles
 }
 
+/// Packets cover blocks of this many pixels across and up.
+const PACKET_WIDTH: u32 = 4;
+const PACKET_HEIGHT: u32 = 2;
+
 /// The pixels of one tile, row by row from its bottom row, and the rays they took.
 fn render_tile(
     shader: &Shader,
@@ -242,36 +258,73 @@ fn render_tile(
     tile: Tile,
 ) -> (Vec<Vec3>, u64) {
     let mut rays = 0;
-    let mut pixels = Vec::with_capacity((tile.width * tile.height) as usize);
-    for y in tile.y..tile.y + tile.height {
-        for x in tile.x..tile.x + tile.width {
-            let pixel = y * options.width + x;
-            let (k, jittered) = match options.sampling {
-                Sampling::Centre => (1, false),
-                Sampling::Jittered(k) => (k, true),
-            };
-            let mut sum = Vec3::ZERO;
-            for q in 0..k {
-                for p in 0..k {
-                    let rng = SampleRng::new(pixel, q * k + p, options.seed);
-                    let (jx, jy) = if jittered {
-                        (rng.uniform(dim::FILM_X), rng.uniform(dim::FILM_Y))
-                    } else {
-                        (0.5, 0.5)
-                    };
-                    let sx = x as f32 + (p as f32 + jx) / k as f32;
-                    let sy = y as f32 + (q as f32 + jy) / k as f32;
-                    let lens = if camera.is_thin_lens() {
-                        rng.unit_disk(dim::LENS_U, dim::LENS_V)
-                    } else {
-                        Vec2::ZERO
-                    };
-                    sum += shader.trace(&camera.ray(sx, sy, lens, 0.0), 1, 1.0, &mut rays);
+    let (k, jittered) = match options.sampling {
+        Sampling::Centre => (1, false),
+        Sampling::Jittered(k) => (k, true),
+    };
+    // Sample (p, q) of pixel (x, y): the same ray in both modes.
+    let sample_ray = |x: u32, y: u32, p: u32, q: u32| {
+        let rng = SampleRng::new(y * options.width + x, q * k + p, options.seed);
+        let (jx, jy) = if jittered {
+            (rng.uniform(dim::FILM_X), rng.uniform(dim::FILM_Y))
+        } else {
+            (0.5, 0.5)
+        };
+        let sx = x as f32 + (p as f32 + jx) / k as f32;
+        let sy = y as f32 + (q as f32 + jy) / k as f32;
+        let lens = if camera.is_thin_lens() {
+            rng.unit_disk(dim::LENS_U, dim::LENS_V)
+        } else {
+            Vec2::ZERO
+        };
+        camera.ray(sx, sy, lens, 0.0)
+    };
+    let mut sums = vec![Vec3::ZERO; (tile.width * tile.height) as usize];
+    match options.mode {
+        RenderMode::Scalar => {
+            for (i, sum) in sums.iter_mut().enumerate() {
+                let (x, y) = (
+                    tile.x + i as u32 % tile.width,
+                    tile.y + i as u32 / tile.width,
+                );
+                for q in 0..k {
+                    for p in 0..k {
+                        *sum += shader.trace(&sample_ray(x, y, p, q), 1, 1.0, &mut rays);
+                    }
                 }
             }
-            let colour = sum / (k * k) as f32;
-            pixels.push(colour);
+        }
+        RenderMode::Packet => {
+            let mut visible = Vec::with_capacity(shader.lights.len());
+            for by in (0..tile.height).step_by(PACKET_HEIGHT as usize) {
+                for bx in (0..tile.width).step_by(PACKET_WIDTH as usize) {
+                    // Lane l is pixel (bx + l % 4, by + l / 4) of the tile.
+                    let lane_pixel = |l: u32| {
+                        let (x, y) = (bx + l % PACKET_WIDTH, by + l / PACKET_WIDTH);
+                        (x < tile.width && y < tile.height).then_some((x, y))
+                    };
+                    let active = (0..8)
+                        .filter(|&l| lane_pixel(l).is_some())
+                        .fold(0u8, |m, l| m | 1 << l);
+                    for q in 0..k {
+                        for p in 0..k {
+                            let packet = std::array::from_fn(|l| {
+                                let (x, y) = lane_pixel(l as u32).unwrap_or((bx, by));
+                                sample_ray(tile.x + x, tile.y + y, p, q)
+                            });
+                            let colours =
+                                shader.trace_packet(&packet, active, &mut visible, &mut rays);
+                            for (l, colour) in colours.iter().enumerate() {
+                                if let Some((x, y)) = lane_pixel(l as u32) {
+                                    sums[(y * tile.width + x) as usize] += *colour;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
         }
     }
-    (pixels, rays)
+    let samples = (k * k) as f32;
+    (sums.into_iter().map(|sum| sum / samples).collect(), rays)
 }

@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::skybox::Skybox;
 use crate::accel::Tracer;
-use crate::ray::Ray;
+use crate::ray::{Hit, Ray};
 use crate::scene::{Light, Material, Scene};
 
 /// Offset of secondary ray origins along the normal against self-intersection, in scene
@@ -119,17 +119,81 @@ impl<'a> Shader<'a> {
     /// `rays` counts every ray traced, this one included.
     pub fn trace(&self, ray: &Ray, depth: u32, ior_here: f32, rays: &mut u64) -> Vec3 {
         *rays += 1;
-        let Some(hit) = self.tracer.closest(ray, 0.0, f32::INFINITY) else {
+        let hit = self.tracer.closest(ray, 0.0, f32::INFINITY);
+        self.shade(
+            ray,
+            hit,
+            depth,
+            ior_here,
+            rays,
+            &mut |shadow, distance, _| self.tracer.occluded(shadow, 0.0, distance),
+        )
+    }
+
+    /// The colours seen along up to eight primary rays (lanes set in `active`): the same
+    /// colours as [`Shader::trace`] gives each, with the primary rays and the first shadow
+    /// rays to each light traced as packets. `visible` is scratch space.
+    pub fn trace_packet(
+        &self,
+        packet: &[Ray; 8],
+        active: u8,
+        visible: &mut Vec<u8>,
+        rays: &mut u64,
+    ) -> [Vec3; 8] {
+        *rays += u64::from(active.count_ones());
+        let hits = self.tracer.closest_packet(packet, active, f32::INFINITY);
+        // Shadow rays of every lane to light `i`, as one packet; bit k of `visible[i]`
+        // says whether lane k sees it.
+        visible.clear();
+        let surfaces: [Option<Surface>; 8] =
+            std::array::from_fn(|k| hits[k].map(|hit| self.surface(&packet[k], &hit)));
+        for light in &self.lights {
+            let mut shadows = [Ray::new(Vec3::ZERO, Vec3::Z); 8];
+            let mut distances = [0.0; 8];
+            let mut lanes = 0u8;
+            for k in 0..8 {
+                let Some(surface) = surfaces[k] else {
+                    continue;
+                };
+                if let Some((ray, distance)) =
+                    shadow_ray(surface.p, surface.nf, light, packet[k].time)
+                {
+                    (shadows[k], distances[k]) = (ray, distance);
+                    lanes |= 1 << k;
+                }
+            }
+            let blocked = self.tracer.occluded_packet(&shadows, &distances, lanes);
+            visible.push(lanes & !blocked);
+        }
+        std::array::from_fn(|k| {
+            if active & (1 << k) == 0 {
+                return Vec3::ZERO;
+            }
+            self.shade(&packet[k], hits[k], 1, 1.0, rays, &mut |_, _, light| {
+                visible[light] & (1 << k) == 0
+            })
+        })
+    }
+
+    /// The colour at `hit` (or the background when there is none) seen along `ray`.
+    /// `occluded(shadow_ray, distance, light_index)` answers the shadow queries of this
+    /// hit; deeper rays are traced one by one.
+    fn shade(
+        &self,
+        ray: &Ray,
+        hit: Option<Hit>,
+        depth: u32,
+        ior_here: f32,
+        rays: &mut u64,
+        occluded: &mut dyn FnMut(&Ray, f32, usize) -> bool,
+    ) -> Vec3 {
+        let Some(hit) = hit else {
             return self.background(ray.dir);
         };
-        let geometry = &self.tracer.geometry;
-        let p = ray.at(hit.t);
-        let normal = geometry.normal(hit.prim, p, hit.u, hit.v, ray.time);
-        let inside = ray.dir.dot(normal) > 0.0;
-        let nf = if inside { -normal } else { normal };
-        let material = &self.scene.materials[geometry.material(hit.prim) as usize];
+        let Surface { p, nf, inside } = self.surface(ray, &hit);
+        let material = &self.scene.materials[self.tracer.geometry.material(hit.prim) as usize];
 
-        let mut colour = self.local(ray, p, nf, material, rays);
+        let mut colour = self.local(ray, p, nf, material, rays, occluded);
         if depth >= self.options.max_depth {
             return colour.clamp(Vec3::ZERO, Vec3::ONE);
         }
@@ -177,26 +241,38 @@ impl<'a> Shader<'a> {
         colour.clamp(Vec3::ZERO, Vec3::ONE)
     }
 
+    /// The hit point and the normal facing the ray.
+    fn surface(&self, ray: &Ray, hit: &Hit) -> Surface {
+        let p = ray.at(hit.t);
+        let normal = self
+            .tracer
+            .geometry
+            .normal(hit.prim, p, hit.u, hit.v, ray.time);
+        let inside = ray.dir.dot(normal) > 0.0;
+        let nf = if inside { -normal } else { normal };
+        Surface { p, nf, inside }
+    }
+
     /// Blinn-Phong over the lights that face the surface and are not shadowed.
-    fn local(&self, ray: &Ray, p: Vec3, nf: Vec3, m: &Material, rays: &mut u64) -> Vec3 {
+    fn local(
+        &self,
+        ray: &Ray,
+        p: Vec3,
+        nf: Vec3,
+        m: &Material,
+        rays: &mut u64,
+        occluded: &mut dyn FnMut(&Ray, f32, usize) -> bool,
+    ) -> Vec3 {
         let mut colour = Vec3::ZERO;
-        let origin = p + EPS * nf;
-        for light in &self.lights {
-            if nf.dot(light.position - p) <= 0.0 {
+        for (index, light) in self.lights.iter().enumerate() {
+            let Some((shadow, distance)) = shadow_ray(p, nf, light, ray.time) else {
                 continue;
-            }
-            let to_light = light.position - origin;
-            let distance = to_light.length();
-            let l = to_light / distance;
-            *rays += 1;
-            let shadow = Ray {
-                origin,
-                dir: l,
-                time: ray.time,
             };
-            if self.tracer.occluded(&shadow, 0.0, distance) {
+            *rays += 1;
+            if occluded(&shadow, distance, index) {
                 continue;
             }
+            let l = shadow.dir;
             let diffuse = m.diffuse * m.kd * nf.dot(l).max(0.0);
             let h = (l - ray.dir).normalize();
             let specular = self.katt * m.specular * m.ks * nf.dot(h).max(0.0).powf(m.shine);
@@ -211,6 +287,29 @@ impl<'a> Shader<'a> {
             None => self.scene.background,
         }
     }
+}
+
+/// Where a ray met a surface.
+#[derive(Clone, Copy, Debug)]
+struct Surface {
+    p: Vec3,
+    /// The unit normal turned to face the ray.
+    nf: Vec3,
+    /// The ray arrived from inside the surface.
+    inside: bool,
+}
+
+/// The shadow ray from the hit point `p` (normal `nf` facing the viewer) to `light`, and
+/// the light's distance along it; `None` when the light is behind the surface.
+fn shadow_ray(p: Vec3, nf: Vec3, light: &LightSample, time: f32) -> Option<(Ray, f32)> {
+    if nf.dot(light.position - p) <= 0.0 {
+        return None;
+    }
+    let origin = p + EPS * nf;
+    let to_light = light.position - origin;
+    let distance = to_light.length();
+    let dir = to_light / distance;
+    Some((Ray { origin, dir, time }, distance))
 }
 
 /// Reflectance from the exact Fresnel equations: the mean of the two polarisations.
