@@ -15,8 +15,10 @@ use crate::scene::{Light, Scene};
 pub const WIDTH: u32 = 1024;
 /// Secondary rays start this far off the surface, along the normal facing the ray.
 pub const OFFSET: f64 = 1e-4;
-/// Rays handed to a thread at a time.
-const CHUNK: usize = 1024;
+/// Blocks of eight rays handed to a thread at a time.
+const CHUNK: usize = 128;
+/// An idle lane of a block.
+const IDLE: u32 = u32::MAX;
 
 /// One of the protocol's ray sets.
 #[derive(Clone, Debug)]
@@ -27,6 +29,54 @@ pub struct RaySet {
     pub t_max: Vec<f32>,
     /// Occlusion queries rather than closest hits.
     pub occlusion: bool,
+    /// The rays in groups of eight, as indices into `rays` (`IDLE` past the end): 4 x 2
+    /// pixel tiles for primary rays, as the Embree harness groups them, and eight
+    /// consecutive rays otherwise. Both paths walk the same blocks.
+    pub blocks: Vec<[u32; 8]>,
+}
+
+/// How a set's rays travel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Path {
+    /// One ray at a time.
+    Single,
+    /// A block of eight rays as one packet.
+    Packet,
+}
+
+/// Eight consecutive rays per block.
+fn consecutive_blocks(n: usize) -> Vec<[u32; 8]> {
+    (0..n.div_ceil(8))
+        .map(|b| {
+            std::array::from_fn(|k| {
+                let i = 8 * b + k;
+                if i < n {
+                    i as u32
+                } else {
+                    IDLE
+                }
+            })
+        })
+        .collect()
+}
+
+/// 4 x 2 pixel tiles over a `width` x `height` image stored row by row: lanes 0-3 on
+/// row `2 ty`, lanes 4-7 on the row above.
+fn tile_blocks(width: u32, height: u32) -> Vec<[u32; 8]> {
+    let mut blocks = Vec::with_capacity((width as usize / 4 + 1) * (height as usize / 2 + 1));
+    for ty in 0..height.div_ceil(2) {
+        for tx in 0..width.div_ceil(4) {
+            blocks.push(std::array::from_fn(|k| {
+                let (x, y) = (4 * tx + k as u32 % 4, 2 * ty + k as u32 / 4);
+                if x < width && y < height {
+                    y * width + x
+                } else {
+                    IDLE
+                }
+            }));
+        }
+    }
+    blocks
 }
 
 /// What one pass over a set found, and the fastest pass.
@@ -61,6 +111,7 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
         rays: Vec::with_capacity((width * height) as usize),
         t_max: vec![f32::INFINITY; (width * height) as usize],
         occlusion: false,
+        blocks: tile_blocks(width, height),
     };
     // The pinhole camera of P3F.md section 3 in double precision (aperture and focal
     // play no part), so that the rays round to the same floats as the Embree harness's.
@@ -94,12 +145,14 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
         rays: Vec::new(),
         t_max: Vec::new(),
         occlusion: true,
+        blocks: Vec::new(),
     };
     let mut reflection = RaySet {
         name: "reflection",
         rays: Vec::new(),
         t_max: Vec::new(),
         occlusion: false,
+        blocks: Vec::new(),
     };
     let g = tracer.geometry;
     for ray in &primary.rays {
@@ -147,44 +200,41 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
             .push(Ray::new(origin.as_vec3(), mirror.normalize().as_vec3()));
         reflection.t_max.push(f32::INFINITY);
     }
+    shadow.blocks = consecutive_blocks(shadow.rays.len());
+    reflection.blocks = consecutive_blocks(reflection.rays.len());
     [primary, shadow, reflection]
 }
 
-/// Traces `set` `reps` times on `pool` and returns the checksums and the fastest pass.
-/// Every pass must give the same checksums; a pass that does not is an error.
+/// Traces `set` `reps` times on `pool` along `path` and returns the checksums and the
+/// fastest pass. Every pass must give the same checksums; a pass that does not is an error.
 pub fn trace_set(
     tracer: &Tracer,
     set: &RaySet,
+    path: Path,
     pool: &rayon::ThreadPool,
     reps: u32,
 ) -> Result<SetResult, String> {
-    // Per ray: the hit's t, 0 for an occluded shadow ray, -1 for a miss.
-    let mut answers = vec![f32::NAN; set.rays.len()];
+    // Per lane: the hit's t, 0 for an occluded shadow ray, -1 for a miss.
+    let mut answers = vec![[f32::NAN; 8]; set.blocks.len()];
     let mut result: Option<SetResult> = None;
     for pass in 1..=reps.max(1) {
-        answers.fill(f32::NAN);
+        answers.fill([f32::NAN; 8]);
         let start = Instant::now();
         pool.install(|| {
             answers
                 .par_chunks_mut(CHUNK)
-                .zip(set.rays.par_chunks(CHUNK))
-                .zip(set.t_max.par_chunks(CHUNK))
-                .for_each(|((answers, rays), t_max)| {
-                    for ((answer, ray), &t_max) in answers.iter_mut().zip(rays).zip(t_max) {
-                        *answer = if set.occlusion {
-                            if tracer.occluded(ray, 0.0, t_max) {
-                                0.0
-                            } else {
-                                -1.0
-                            }
-                        } else {
-                            tracer.closest(ray, 0.0, t_max).map_or(-1.0, |h| h.t)
+                .zip(set.blocks.par_chunks(CHUNK))
+                .for_each(|(answers, blocks)| {
+                    for (answer, block) in answers.iter_mut().zip(blocks) {
+                        *answer = match path {
+                            Path::Single => trace_single(tracer, set, block),
+                            Path::Packet => trace_packet(tracer, set, block),
                         };
                     }
                 });
         });
         let elapsed = start.elapsed();
-        let (hits, tsum) = checksum(&answers);
+        let (hits, tsum) = checksum(&in_ray_order(set, &answers));
         match &mut result {
             None => {
                 result = Some(SetResult {
@@ -205,6 +255,57 @@ pub fn trace_set(
     Ok(result.expect("at least one pass ran"))
 }
 
+/// The answer of each lane of `block`, one ray at a time.
+fn trace_single(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> [f32; 8] {
+    block.map(|i| {
+        if i == IDLE {
+            return -1.0;
+        }
+        let (ray, t_max) = (&set.rays[i as usize], set.t_max[i as usize]);
+        if set.occlusion {
+            if tracer.occluded(ray, 0.0, t_max) {
+                0.0
+            } else {
+                -1.0
+            }
+        } else {
+            tracer.closest(ray, 0.0, t_max).map_or(-1.0, |h| h.t)
+        }
+    })
+}
+
+/// The answer of each lane of `block`, the block as one packet.
+fn trace_packet(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> [f32; 8] {
+    let active = (0..8)
+        .filter(|&k| block[k] != IDLE)
+        .fold(0u8, |m, k| m | 1 << k);
+    // Idle lanes carry a copy of the first ray and are masked off.
+    let lane = |k: usize| if block[k] == IDLE { block[0] } else { block[k] } as usize;
+    let rays = std::array::from_fn(|k| set.rays[lane(k)]);
+    if set.occlusion {
+        let t_max = std::array::from_fn(|k| set.t_max[lane(k)]);
+        let blocked = tracer.occluded_packet(&rays, &t_max, active);
+        std::array::from_fn(|k| if blocked & (1 << k) != 0 { 0.0 } else { -1.0 })
+    } else {
+        // Closest-hit sets have one `t_max` for every ray.
+        let hits = tracer.closest_packet(&rays, active, set.t_max[lane(0)]);
+        hits.map(|h| h.map_or(-1.0, |h| h.t))
+    }
+}
+
+/// The answers of `blocks` rearranged into the order of the set's rays.
+fn in_ray_order(set: &RaySet, answers: &[[f32; 8]]) -> Vec<f32> {
+    let mut ordered = vec![f32::NAN; set.rays.len()];
+    for (block, answer) in set.blocks.iter().zip(answers) {
+        for (&i, &a) in block.iter().zip(answer) {
+            if i != IDLE {
+                ordered[i as usize] = a;
+            }
+        }
+    }
+    ordered
+}
+
 /// Hits and the sum of their `t`, summed in ray order in double precision.
 fn checksum(answers: &[f32]) -> (u64, f64) {
     answers
@@ -216,7 +317,7 @@ fn checksum(answers: &[f32]) -> (u64, f64) {
 /// One result line: `ray-set api threads rays hits tsum mrays_per_s`.
 pub fn line(set: &RaySet, api: &str, threads: usize, r: &SetResult) -> String {
     format!(
-        "{:<10}  {:<14}  {:2}  {:8}  {:8}  {:16.3}  {:8.2}",
+        "{:<10}  {:<15}  {:2}  {:8}  {:8}  {:16.3}  {:8.2}",
         set.name,
         api,
         threads,
@@ -290,6 +391,22 @@ mod tests {
     }
 
     #[test]
+    fn blocks_cover_every_ray_once() {
+        let covers = |blocks: Vec<[u32; 8]>, n: usize| {
+            let mut seen = vec![0; n];
+            for &i in blocks.iter().flatten().filter(|&&i| i != IDLE) {
+                seen[i as usize] += 1;
+            }
+            seen.iter().all(|&count| count == 1)
+        };
+        for (w, h) in [(8, 4), (7, 5), (1, 1), (1024, 768)] {
+            assert!(covers(tile_blocks(w, h), (w * h) as usize), "{w}x{h}");
+        }
+        assert!(covers(consecutive_blocks(13), 13));
+        assert_eq!(tile_blocks(8, 2)[1], [4, 5, 6, 7, 12, 13, 14, 15]);
+    }
+
+    #[test]
     fn checksums_count_hits_and_sum_t() {
         assert_eq!(checksum(&[-1.0, 2.5, 0.0, 1.5]), (3, 4.0));
         let scene = parse_text(SCENE).unwrap();
@@ -299,9 +416,11 @@ mod tests {
             .num_threads(2)
             .build()
             .unwrap();
-        let primary = trace_set(&tracer, &sets[0], &pool, 2).unwrap();
+        let primary = trace_set(&tracer, &sets[0], Path::Single, &pool, 2).unwrap();
         assert_eq!(primary.hits as usize, sets[2].rays.len());
-        let shadow = trace_set(&tracer, &sets[1], &pool, 1).unwrap();
+        let packets = trace_set(&tracer, &sets[0], Path::Packet, &pool, 1).unwrap();
+        assert_eq!((packets.hits, packets.tsum), (primary.hits, primary.tsum));
+        let shadow = trace_set(&tracer, &sets[1], Path::Packet, &pool, 1).unwrap();
         assert_eq!(
             shadow.hits, 0,
             "nothing stands between the sphere and its light"
