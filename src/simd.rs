@@ -218,16 +218,6 @@ impl Mask8 {
     pub fn select(self, if_true: F32x8, if_false: F32x8) -> F32x8 {
         F32x8(self.0.select(if_true.0, if_false.0))
     }
-
-    /// [`Mask8::select`] on each component.
-    #[inline]
-    pub fn select3(self, if_true: Vec3x8, if_false: Vec3x8) -> Vec3x8 {
-        Vec3x8 {
-            x: self.select(if_true.x, if_false.x),
-            y: self.select(if_true.y, if_false.y),
-            z: self.select(if_true.z, if_false.z),
-        }
-    }
 }
 
 impl BitAnd for Mask8 {
@@ -318,18 +308,6 @@ impl Vec3x8 {
             x: one / self.x,
             y: one / self.y,
             z: one / self.z,
-        }
-    }
-}
-
-impl Add for Vec3x8 {
-    type Output = Vec3x8;
-    #[inline]
-    fn add(self, rhs: Self) -> Self {
-        Vec3x8 {
-            x: self.x + rhs.x,
-            y: self.y + rhs.y,
-            z: self.z + rhs.z,
         }
     }
 }
