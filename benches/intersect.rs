@@ -1,11 +1,14 @@
-//! Scalar intersection routines, one ray against one primitive, hitting and missing.
+//! Scalar intersection routines, one ray against one primitive, hitting and missing; then
+//! the SIMD kernels against the eight scalar calls they replace: packet kernels (eight
+//! rays, one primitive) and leaf kernels (one ray, a pack of eight primitives).
 
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
-use p3trace::intersect;
-use p3trace::ray::Ray;
+use p3trace::intersect::{self, BoxPack8, SpherePack8, TrianglePack8};
+use p3trace::ray::{Ray, RayPacket};
+use p3trace::simd::{F32x8, Mask8};
 
 fn routines(c: &mut Criterion) {
     let hit = Ray::new(Vec3::new(0.1, 0.2, -5.0), Vec3::Z);
@@ -59,5 +62,143 @@ fn routines(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, routines);
+/// Eight rays fanning over the unit sphere at the origin: some hit, some miss.
+fn fan() -> [Ray; 8] {
+    std::array::from_fn(|i| {
+        let x = -1.4 + 0.4 * i as f32;
+        Ray::new(
+            Vec3::new(x, 0.2, -5.0),
+            Vec3::new(-0.02 * x, 0.0, 1.0).normalize(),
+        )
+    })
+}
+
+fn packets(c: &mut Criterion) {
+    let rays = fan();
+    let packet = RayPacket::new(&rays);
+    let (lo, hi) = (F32x8::ZERO, F32x8::splat(f32::INFINITY));
+    let (p0, e1, e2) = (
+        Vec3::new(-1., -1., 0.),
+        Vec3::new(2., 0., 0.),
+        Vec3::new(0., 2., 0.),
+    );
+    let (bmin, bmax) = (Vec3::splat(-1.0), Vec3::ONE);
+
+    c.bench_function("packet/sphere/simd", |b| {
+        b.iter(|| intersect::sphere_packet(black_box(&packet), Vec3::ZERO, 1.0, lo, hi, Mask8::ALL))
+    });
+    c.bench_function("packet/sphere/scalar x8", |b| {
+        b.iter(|| {
+            black_box(&rays).map(|r| intersect::sphere(&r, Vec3::ZERO, 1.0, 0.0, f32::INFINITY))
+        })
+    });
+    c.bench_function("packet/triangle/simd", |b| {
+        b.iter(|| intersect::triangle_packet(black_box(&packet), p0, e1, e2, lo, hi, Mask8::ALL))
+    });
+    c.bench_function("packet/triangle/scalar x8", |b| {
+        b.iter(|| black_box(&rays).map(|r| intersect::triangle(&r, p0, e1, e2, 0.0, f32::INFINITY)))
+    });
+    c.bench_function("packet/slab/simd", |b| {
+        b.iter(|| intersect::slab_entry_packet(black_box(&packet), bmin, bmax, lo, hi, Mask8::ALL))
+    });
+    // The packet holds its inv_dir; the scalar rays get theirs computed outside the loop.
+    let inv: [Vec3; 8] = rays.map(|r| r.dir.recip());
+    c.bench_function("packet/slab/scalar x8", |b| {
+        b.iter(|| {
+            std::array::from_fn::<_, 8, _>(|i| {
+                let r = &black_box(&rays)[i];
+                intersect::slab_entry(r.origin, inv[i], bmin, bmax, 0.0, f32::INFINITY)
+            })
+        })
+    });
+}
+
+fn leaves(c: &mut Criterion) {
+    let ray = Ray::new(Vec3::new(0.1, 0.2, -5.0), Vec3::Z);
+    let inv_dir = ray.dir.recip();
+    let spheres: Vec<(Vec3, f32)> = (0..8)
+        .map(|i| (Vec3::new(0.5 * i as f32 - 2.0, 0.0, 0.0), 0.3))
+        .collect();
+    let triangles: Vec<[Vec3; 3]> = (0..8)
+        .map(|i| {
+            let x = 0.5 * i as f32 - 2.0;
+            [
+                Vec3::new(x, -1.0, i as f32),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(0.0, 2.0, 0.0),
+            ]
+        })
+        .collect();
+    let boxes: Vec<(Vec3, Vec3)> = spheres
+        .iter()
+        .map(|&(c, r)| (c - Vec3::splat(r), c + Vec3::splat(r)))
+        .collect();
+    let (sphere_pack, triangle_pack, box_pack) = (
+        SpherePack8::new(&spheres),
+        TrianglePack8::new(&triangles),
+        BoxPack8::new(&boxes),
+    );
+    let inf = f32::INFINITY;
+
+    c.bench_function("leaf/sphere/simd", |b| {
+        b.iter(|| intersect::sphere_leaf(black_box(&ray), &sphere_pack, 0.0, inf))
+    });
+    c.bench_function("leaf/sphere/scalar x8", |b| {
+        b.iter(|| {
+            let ray = black_box(&ray);
+            spheres
+                .iter()
+                .map(|&(c, r)| intersect::sphere(ray, c, r, 0.0, inf))
+                .fold(inf, |best, t| t.map_or(best, |t| t.min(best)))
+        })
+    });
+    c.bench_function("leaf/triangle/simd", |b| {
+        b.iter(|| intersect::triangle_leaf(black_box(&ray), &triangle_pack, 0.0, inf))
+    });
+    c.bench_function("leaf/triangle/scalar x8", |b| {
+        b.iter(|| {
+            let ray = black_box(&ray);
+            triangles
+                .iter()
+                .map(|&[p0, e1, e2]| intersect::triangle(ray, p0, e1, e2, 0.0, inf))
+                .fold(inf, |best, h| h.map_or(best, |h| h.t.min(best)))
+        })
+    });
+    c.bench_function("leaf/box/simd", |b| {
+        b.iter(|| intersect::aabb_leaf(black_box(&ray), inv_dir, &box_pack, 0.0, inf))
+    });
+    c.bench_function("leaf/box/scalar x8", |b| {
+        b.iter(|| {
+            let ray = black_box(&ray);
+            boxes
+                .iter()
+                .map(|&(lo, hi)| intersect::aabb(ray, inv_dir, lo, hi, 0.0, inf))
+                .fold(inf, |best, t| t.map_or(best, |t| t.min(best)))
+        })
+    });
+    c.bench_function("leaf/slab/simd", |b| {
+        b.iter(|| {
+            intersect::slab_entry8(
+                black_box(ray.origin),
+                inv_dir,
+                &box_pack,
+                0.0,
+                inf,
+                Mask8::ALL,
+            )
+        })
+    });
+    c.bench_function("leaf/slab/scalar x8", |b| {
+        b.iter(|| {
+            let origin = black_box(ray.origin);
+            boxes
+                .iter()
+                .map(|&(lo, hi)| intersect::slab_entry(origin, inv_dir, lo, hi, 0.0, inf))
+                .enumerate()
+                .fold(0u8, |bits, (i, t)| bits | u8::from(t.is_some()) << i)
+        })
+    });
+}
+
+criterion_group!(benches, routines, packets, leaves);
 criterion_main!(benches);

@@ -5,7 +5,8 @@
 //!
 //! - [`scene`] reads P3F files into a [`scene::Scene`] whose primitives are stored
 //!   structure-of-arrays ([`scene::geometry`]).
-//! - [`intersect`] holds the scalar ray-primitive tests, the reference for everything faster.
+//! - [`intersect`] holds the scalar ray-primitive tests, the reference for everything faster,
+//!   and beside each its SIMD twins over the eight-lane types of [`simd`].
 //! - [`accel`] finds closest hits and answers occlusion queries over a scene.
 //! - [`render`] turns a scene into an image: camera, Whitted shading, skybox, tiles, film.
 //! - [`compare`] measures how two images differ.
@@ -23,3 +24,4 @@ pub mod output;
 pub mod ray;
 pub mod render;
 pub mod scene;
+pub mod simd;

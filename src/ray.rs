@@ -2,6 +2,8 @@
 
 use glam::Vec3;
 
+use crate::simd::{F32x8, Mask8, Vec3x8};
+
 /// A ray `origin + t * dir`. `dir` is unit length wherever the renderer makes rays: the
 /// intersection routines rely on it (the sphere test skips the `dot(d, d)` term).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,6 +25,42 @@ impl Ray {
 
     pub fn at(&self, t: f32) -> Vec3 {
         self.origin + t * self.dir
+    }
+}
+
+/// Eight rays as structure of arrays, for the packet kernels of [`crate::intersect`]:
+/// lane `i` is ray `i`. `inv_dir = 1 / dir` is computed once, as the scalar callers do
+/// with `ray.dir.recip()`, so the slab tests see the same bits.
+#[derive(Clone, Copy, Debug)]
+pub struct RayPacket {
+    pub origin: Vec3x8,
+    pub dir: Vec3x8,
+    pub inv_dir: Vec3x8,
+    pub time: F32x8,
+}
+
+impl RayPacket {
+    pub fn new(rays: &[Ray; 8]) -> Self {
+        let dir = Vec3x8::from_lanes(rays.map(|r| r.dir));
+        RayPacket {
+            origin: Vec3x8::from_lanes(rays.map(|r| r.origin)),
+            dir,
+            inv_dir: dir.recip(),
+            time: F32x8::from_array(rays.map(|r| r.time)),
+        }
+    }
+
+    /// Up to eight rays; the lanes past `rays.len()` hold NaN rays and are left out of
+    /// the returned active mask, so a short tail needs no scalar loop.
+    ///
+    /// # Panics
+    /// If `rays` holds more than eight rays.
+    pub fn from_slice(rays: &[Ray]) -> (Self, Mask8) {
+        assert!(rays.len() <= 8, "a packet holds at most 8 rays");
+        let nan = Ray::new(Vec3::NAN, Vec3::NAN);
+        let lanes = std::array::from_fn(|i| rays.get(i).copied().unwrap_or(nan));
+        let active = Mask8::from_bitmask(((1u16 << rays.len()) - 1) as u8);
+        (RayPacket::new(&lanes), active)
     }
 }
 

@@ -19,6 +19,7 @@ use glam::Vec3;
 use super::bounds::{prim_bounds, Aabb};
 use super::wide::Bvh8;
 use super::{ClosestHit, BOUNDED};
+use crate::intersect::slab_entry;
 use crate::ray::{PrimId, Ray};
 use crate::scene::Geometry;
 
@@ -104,20 +105,18 @@ impl Node {
         self.offset as usize
     }
 
-    /// The entry distance of the ray into the node's box within `(t_min, t_max]`.
-    /// `f32::min`/`max` ignore the NaN of `0 * inf`, so a ray in a slab's plane passes:
-    /// the test errs towards visiting, never towards missing.
+    /// The entry distance of the ray into the node's box within `[t_min, t_max]`
+    /// ([`slab_entry`]: a ray in a slab's plane passes, erring towards visiting).
     #[inline]
     fn entry(&self, origin: Vec3, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
-        let mut near = t_min;
-        let mut far = t_max;
-        for k in 0..3 {
-            let t1 = (self.min[k] - origin[k]) * inv_dir[k];
-            let t2 = (self.max[k] - origin[k]) * inv_dir[k];
-            near = near.max(t1.min(t2));
-            far = far.min(t1.max(t2));
-        }
-        (near <= far).then_some(near)
+        slab_entry(
+            origin,
+            inv_dir,
+            Vec3::from_array(self.min),
+            Vec3::from_array(self.max),
+            t_min,
+            t_max,
+        )
     }
 }
 
@@ -160,7 +159,7 @@ impl Bvh {
         let prims: Vec<PrimId> = items.iter().map(|it| it.prim).collect();
         let wide = match width {
             BvhWidth::Two => None,
-            BvhWidth::Eight => Bvh8::collapse(&nodes, &prims),
+            BvhWidth::Eight => Bvh8::collapse(geometry, &nodes, &prims),
         };
         Bvh {
             nodes,

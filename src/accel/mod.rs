@@ -124,7 +124,26 @@ impl ClosestHit {
         self.hit.map_or(self.t_max, |h| h.t)
     }
 
-    /// Tests `prim` and keeps its hit if it is closer, or as close with a smaller id.
+    /// The upper end of the interval for the next test: the routines take an open
+    /// interval, so a tie with the best hit needs the next float up.
+    pub fn bound(&self) -> f32 {
+        match self.hit {
+            Some(h) => h.t.next_up(),
+            None => self.t_max,
+        }
+    }
+
+    /// Keeps `hit` if it is closer than the best, or as close with a smaller id.
+    pub fn offer(&mut self, hit: Hit) {
+        let wins = self
+            .hit
+            .is_none_or(|best| hit.t < best.t || (hit.t == best.t && hit.prim < best.prim));
+        if wins {
+            self.hit = Some(hit);
+        }
+    }
+
+    /// Tests `prim` and keeps its hit if it wins.
     pub fn test(
         &mut self,
         geometry: &Geometry,
@@ -133,23 +152,13 @@ impl ClosestHit {
         inv_dir: Vec3,
         t_min: f32,
     ) {
-        // The routines take an open interval, so a tie needs the next float up.
-        let bound = match self.hit {
-            Some(h) => h.t.next_up(),
-            None => self.t_max,
-        };
-        if let Some(h) = geometry.intersect(prim, ray, inv_dir, t_min, bound) {
-            let wins = self
-                .hit
-                .is_none_or(|best| h.t < best.t || (h.t == best.t && prim < best.prim));
-            if wins {
-                self.hit = Some(Hit {
-                    t: h.t,
-                    prim,
-                    u: h.u,
-                    v: h.v,
-                });
-            }
+        if let Some(h) = geometry.intersect(prim, ray, inv_dir, t_min, self.bound()) {
+            self.offer(Hit {
+                t: h.t,
+                prim,
+                u: h.u,
+                v: h.v,
+            });
         }
     }
 }

@@ -1,6 +1,8 @@
 //! An 8-wide BVH collapsed from a binary one: each node holds the boxes of up to eight
 //! children side by side (one array per coordinate), so that one ray tests all of them at
-//! once. Leaves are the binary tree's leaves, pointing into the same primitive order.
+//! once. A subtree of at most eight triangles, or eight spheres, becomes one leaf whose
+//! primitives are stored side by side too ([`TrianglePack8`], [`SpherePack8`]) and tested
+//! together; other leaves are the binary tree's, tested one primitive at a time.
 //!
 //! Collapsing: a node starts with its binary node's two children, and the child with the
 //! largest surface area is replaced by its own two children while fewer than eight remain
@@ -11,67 +13,86 @@
 //! binary BVH, so the answer is brute force's).
 
 use std::mem::MaybeUninit;
+use std::ops::Range;
 
 use glam::Vec3;
 
 use super::bvh::Node;
 use super::ClosestHit;
-use crate::ray::{PrimId, Ray};
+use crate::intersect::{
+    slab_entry8, sphere_leaf, triangle_leaf, BoxPack8, SpherePack8, TrianglePack8,
+};
+use crate::ray::{Hit, PrimId, PrimKind, Ray};
 use crate::scene::Geometry;
+use crate::simd::Mask8;
 
 /// Children per node.
 pub const WIDTH: usize = 8;
 
-/// A child reference: a node index, or a leaf (the top bit) with its primitive count less
-/// one in bits 27..30 and its first primitive below.
+/// A child reference: a node index, or a leaf (the top bit) with its kind in bits 29..31,
+/// its primitive count less one in bits 26..29, and below, its first primitive (a run of
+/// `prims`) or its pack.
 type ChildRef = u32;
 const LEAF: u32 = 1 << 31;
-const COUNT_SHIFT: u32 = 27;
-const FIRST_MASK: u32 = (1 << COUNT_SHIFT) - 1;
+const KIND_SHIFT: u32 = 29;
+const COUNT_SHIFT: u32 = 26;
+const INDEX_MASK: u32 = (1 << COUNT_SHIFT) - 1;
+/// The kinds of leaf.
+const RUN: u32 = 0;
+const TRIANGLES: u32 = 1;
+const SPHERES: u32 = 2;
 /// The most primitives a leaf may hold, and the most a tree may hold, to be encoded.
-const MAX_LEAF_PRIMS: usize = 1 << (31 - COUNT_SHIFT);
-const MAX_PRIMS: usize = FIRST_MASK as usize + 1;
+const MAX_LEAF_PRIMS: usize = 1 << (KIND_SHIFT - COUNT_SHIFT);
+const MAX_PRIMS: usize = INDEX_MASK as usize + 1;
 
-/// Eight children's boxes, one array per bound and axis, then their references.
-/// 224 bytes of data padded to four cache lines.
+fn leaf_ref(kind: u32, count: usize, index: usize) -> ChildRef {
+    LEAF | kind << KIND_SHIFT | ((count as u32 - 1) << COUNT_SHIFT) | index as u32
+}
+
+/// A leaf reference's kind, primitive count and index.
+fn leaf_parts(child: ChildRef) -> (u32, usize, usize) {
+    (
+        (child & !LEAF) >> KIND_SHIFT,
+        ((child >> COUNT_SHIFT) & (MAX_LEAF_PRIMS as u32 - 1)) as usize + 1,
+        (child & INDEX_MASK) as usize,
+    )
+}
+
+/// Eight children's boxes side by side, then their references: 228 bytes of data padded
+/// to four cache lines.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub struct Node8 {
-    min: [[f32; WIDTH]; 3],
-    max: [[f32; WIDTH]; 3],
+    boxes: BoxPack8,
     child: [ChildRef; WIDTH],
-    /// Children in use: slots `0..count`.
+    /// Children in use: slots `0..count`. The others hold padding boxes, which no box
+    /// value can make the slab test miss, so they are left out of its mask.
     count: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<Node8>() == 256);
 
 impl Node8 {
-    /// Each used child's entry distance within `(t_min, t_max]`, or `None`: the binary
-    /// node's slab test, child by child.
+    /// The used children that the ray enters within `[t_min, t_max]`, as a bit mask, and
+    /// their entry distances (lanes outside the mask are unspecified).
     #[inline]
-    fn entries(&self, origin: Vec3, inv_dir: Vec3, t_min: f32, t_max: f32) -> [Option<f32>; WIDTH] {
-        let mut out = [None; WIDTH];
-        for (k, entry) in out.iter_mut().enumerate().take(self.count as usize) {
-            let mut near = t_min;
-            let mut far = t_max;
-            for axis in 0..3 {
-                let t1 = (self.min[axis][k] - origin[axis]) * inv_dir[axis];
-                let t2 = (self.max[axis][k] - origin[axis]) * inv_dir[axis];
-                near = near.max(t1.min(t2));
-                far = far.min(t1.max(t2));
-            }
-            *entry = (near <= far).then_some(near);
-        }
-        out
+    fn entries(&self, origin: Vec3, inv_dir: Vec3, t_min: f32, t_max: f32) -> (u8, [f32; WIDTH]) {
+        let used = Mask8::from_bitmask(((1u32 << self.count) - 1) as u8);
+        let (hit, t) = slab_entry8(origin, inv_dir, &self.boxes, t_min, t_max, used);
+        (hit.bitmask(), t.to_array())
     }
 }
 
-/// The collapsed tree: `nodes[0]` is the root; leaves index `prims`.
+/// The collapsed tree: `nodes[0]` is the root; leaves index `prims` or the packs.
 #[derive(Clone, Debug)]
 pub struct Bvh8 {
     nodes: Vec<Node8>,
     prims: Vec<PrimId>,
+    triangles: Vec<TrianglePack8>,
+    spheres: Vec<SpherePack8>,
+    /// The primitives of each pack, lane by lane (`triangles`, then `spheres`).
+    triangle_ids: Vec<[PrimId; 8]>,
+    sphere_ids: Vec<[PrimId; 8]>,
     /// The longest path from the root to a leaf, in nodes; bounds the traversal stack.
     depth: usize,
 }
@@ -83,7 +104,7 @@ const STACK_SIZE: usize = (WIDTH - 1) * super::bvh::MAX_DEPTH + 1;
 impl Bvh8 {
     /// Collapses the binary tree `nodes` over `prims`, or returns `None` when it has more
     /// primitives, or larger leaves, than the child references can encode.
-    pub fn collapse(nodes: &[Node], prims: &[PrimId]) -> Option<Bvh8> {
+    pub fn collapse(geometry: &Geometry, nodes: &[Node], prims: &[PrimId]) -> Option<Bvh8> {
         let leaves_fit = nodes
             .iter()
             .all(|n| !n.is_leaf() || n.prim_range().len() <= MAX_LEAF_PRIMS);
@@ -93,62 +114,101 @@ impl Bvh8 {
         let mut tree = Bvh8 {
             nodes: Vec::with_capacity(nodes.len() / 4 + 1),
             prims: prims.to_vec(),
+            triangles: Vec::new(),
+            spheres: Vec::new(),
+            triangle_ids: Vec::new(),
+            sphere_ids: Vec::new(),
             depth: 0,
         };
         if !nodes.is_empty() {
-            let root_children = if nodes[0].is_leaf() {
+            let binary = Binary::new(nodes, prims);
+            let root_children = if binary.is_terminal(0) {
                 vec![0]
             } else {
-                children_of(nodes, 0)
+                binary.children(0)
             };
-            tree.depth = tree.emit(nodes, root_children);
+            tree.depth = tree.emit(geometry, &binary, root_children);
         }
         Some(tree)
     }
 
     /// Appends the node over the binary nodes `start` (expanded as the header says) and
     /// its subtrees; returns the subtree's depth.
-    fn emit(&mut self, binary: &[Node], start: Vec<usize>) -> usize {
+    fn emit(&mut self, geometry: &Geometry, binary: &Binary, start: Vec<usize>) -> usize {
         let mut kids = start;
         while kids.len() < WIDTH {
             let widest = kids
                 .iter()
                 .enumerate()
-                .filter(|(_, &i)| !binary[i].is_leaf())
-                .max_by(|(_, &a), (_, &b)| binary[a].area().total_cmp(&binary[b].area()));
+                .filter(|(_, &i)| !binary.is_terminal(i))
+                .max_by(|(_, &a), (_, &b)| {
+                    binary.nodes[a].area().total_cmp(&binary.nodes[b].area())
+                });
             let Some((k, _)) = widest else {
                 break;
             };
             let i = kids.swap_remove(k);
-            kids.extend(children_of(binary, i));
+            kids.extend(binary.children(i));
         }
         let index = self.nodes.len();
+        let boxes: Vec<(Vec3, Vec3)> = kids
+            .iter()
+            .map(|&i| {
+                let b = binary.nodes[i].bounds();
+                (b.min, b.max)
+            })
+            .collect();
         self.nodes.push(Node8 {
-            min: [[0.0; WIDTH]; 3],
-            max: [[0.0; WIDTH]; 3],
+            boxes: BoxPack8::new(&boxes),
             child: [0; WIDTH],
             count: kids.len() as u32,
         });
         let mut depth = 1;
         for (k, &i) in kids.iter().enumerate() {
-            let node = &binary[i];
-            let child = if node.is_leaf() {
-                let range = node.prim_range();
-                LEAF | ((range.len() as u32 - 1) << COUNT_SHIFT) | range.start as u32
-            } else {
-                let child = self.nodes.len() as u32;
-                depth = depth.max(1 + self.emit(binary, children_of(binary, i)));
-                child
+            let child = match binary.pack_kind(i) {
+                Some(kind) => self.pack(geometry, kind, binary.range[i].clone()),
+                None if binary.nodes[i].is_leaf() => {
+                    let range = binary.range[i].clone();
+                    leaf_ref(RUN, range.len(), range.start)
+                }
+                None => {
+                    let child = self.nodes.len() as u32;
+                    depth = depth.max(1 + self.emit(geometry, binary, binary.children(i)));
+                    child
+                }
             };
-            let bounds = node.bounds();
-            let slot = &mut self.nodes[index];
-            for axis in 0..3 {
-                slot.min[axis][k] = bounds.min[axis];
-                slot.max[axis][k] = bounds.max[axis];
-            }
-            slot.child[k] = child;
+            self.nodes[index].child[k] = child;
         }
         depth
+    }
+
+    /// Stores the primitives `range` of `prims`, all of `kind`, as one pack.
+    fn pack(&mut self, geometry: &Geometry, kind: PrimKind, range: Range<usize>) -> ChildRef {
+        let ids = &self.prims[range];
+        let mut lanes = [ids[0]; 8];
+        lanes[..ids.len()].copy_from_slice(ids);
+        if kind == PrimKind::Triangle {
+            let t = &geometry.triangles;
+            let tris: Vec<[Vec3; 3]> = ids
+                .iter()
+                .map(|id| {
+                    let i = id.index();
+                    [t.p0.get(i), t.e1.get(i), t.e2.get(i)]
+                })
+                .collect();
+            self.triangles.push(TrianglePack8::new(&tris));
+            self.triangle_ids.push(lanes);
+            leaf_ref(TRIANGLES, ids.len(), self.triangles.len() - 1)
+        } else {
+            let s = &geometry.spheres;
+            let spheres: Vec<(Vec3, f32)> = ids
+                .iter()
+                .map(|id| (s.centre.get(id.index()), s.radius[id.index()]))
+                .collect();
+            self.spheres.push(SpherePack8::new(&spheres));
+            self.sphere_ids.push(lanes);
+            leaf_ref(SPHERES, ids.len(), self.spheres.len() - 1)
+        }
     }
 
     pub fn node_count(&self) -> usize {
@@ -160,13 +220,83 @@ impl Bvh8 {
     }
 
     pub fn memory(&self) -> usize {
-        std::mem::size_of_val(&self.nodes[..]) + std::mem::size_of_val(&self.prims[..])
+        std::mem::size_of_val(&self.nodes[..])
+            + std::mem::size_of_val(&self.prims[..])
+            + std::mem::size_of_val(&self.triangles[..])
+            + std::mem::size_of_val(&self.spheres[..])
+            + std::mem::size_of_val(&self.triangle_ids[..])
+            + std::mem::size_of_val(&self.sphere_ids[..])
     }
 
-    fn leaf_prims(&self, child: ChildRef) -> &[PrimId] {
-        let first = (child & FIRST_MASK) as usize;
-        let count = ((child & !LEAF) >> COUNT_SHIFT) as usize + 1;
-        &self.prims[first..first + count]
+    /// Tests the primitives of leaf `child`, keeping the winner in `closest`.
+    #[inline]
+    fn closest_in_leaf(
+        &self,
+        geometry: &Geometry,
+        child: ChildRef,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+        closest: &mut ClosestHit,
+    ) {
+        let (kind, count, index) = leaf_parts(child);
+        match kind {
+            TRIANGLES => {
+                let hits = triangle_leaf(ray, &self.triangles[index], t_min, closest.bound());
+                let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
+                let ids = &self.triangle_ids[index];
+                for_lanes(hits.hit.bitmask(), |k| {
+                    closest.offer(Hit {
+                        t: t[k],
+                        prim: ids[k],
+                        u: u[k],
+                        v: v[k],
+                    })
+                });
+            }
+            SPHERES => {
+                let (hit, t) = sphere_leaf(ray, &self.spheres[index], t_min, closest.bound());
+                let (t, ids) = (t.to_array(), &self.sphere_ids[index]);
+                for_lanes(hit.bitmask(), |k| {
+                    closest.offer(Hit {
+                        t: t[k],
+                        prim: ids[k],
+                        u: 0.0,
+                        v: 0.0,
+                    })
+                });
+            }
+            _ => {
+                for &prim in &self.prims[index..index + count] {
+                    closest.test(geometry, prim, ray, inv_dir, t_min);
+                }
+            }
+        }
+    }
+
+    /// Whether a primitive of leaf `child` blocks the ray within `(t_min, t_max)`.
+    #[inline]
+    fn blocks(
+        &self,
+        geometry: &Geometry,
+        child: ChildRef,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
+        let (kind, count, index) = leaf_parts(child);
+        match kind {
+            TRIANGLES => triangle_leaf(ray, &self.triangles[index], t_min, t_max)
+                .hit
+                .any(),
+            SPHERES => sphere_leaf(ray, &self.spheres[index], t_min, t_max).0.any(),
+            _ => self.prims[index..index + count].iter().any(|&prim| {
+                geometry
+                    .intersect(prim, ray, inv_dir, t_min, t_max)
+                    .is_some()
+            }),
+        }
     }
 
     pub fn closest(
@@ -192,19 +322,17 @@ impl Bvh8 {
                 continue;
             }
             if child & LEAF != 0 {
-                for &prim in self.leaf_prims(child) {
-                    closest.test(geometry, prim, ray, inv_dir, t_min);
-                }
+                self.closest_in_leaf(geometry, child, ray, inv_dir, t_min, closest);
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let entries = node.entries(ray.origin, inv_dir, t_min, closest.limit());
+            let (mut hits, entries) = node.entries(ray.origin, inv_dir, t_min, closest.limit());
             // Push the hit children farthest first, so the nearest is popped next.
             let first = depth;
-            for (k, entry) in entries.iter().enumerate() {
-                let Some(t) = *entry else {
-                    continue;
-                };
+            while hits != 0 {
+                let k = hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                let t = entries[k];
                 let mut slot = depth;
                 // SAFETY: slots `first..depth` were written in this loop.
                 while slot > first && unsafe { stack[slot - 1].assume_init() }.1 < t {
@@ -237,35 +365,79 @@ impl Bvh8 {
             // SAFETY: every slot below `depth` was written before `depth` passed it.
             let child = unsafe { stack[depth].assume_init() };
             if child & LEAF != 0 {
-                let blocked = self.leaf_prims(child).iter().any(|&prim| {
-                    geometry
-                        .intersect(prim, ray, inv_dir, t_min, t_max)
-                        .is_some()
-                });
-                if blocked {
+                if self.blocks(geometry, child, ray, inv_dir, t_min, t_max) {
                     return true;
                 }
                 continue;
             }
             let node = &self.nodes[child as usize];
-            for (k, entry) in node
-                .entries(ray.origin, inv_dir, t_min, t_max)
-                .iter()
-                .enumerate()
-            {
-                if entry.is_some() {
-                    stack[depth].write(node.child[k]);
-                    depth += 1;
-                }
+            let (mut hits, _) = node.entries(ray.origin, inv_dir, t_min, t_max);
+            while hits != 0 {
+                let k = hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                stack[depth].write(node.child[k]);
+                depth += 1;
             }
         }
         false
     }
 }
 
-/// The two children of the interior binary node `i`.
-fn children_of(nodes: &[Node], i: usize) -> Vec<usize> {
-    vec![i + 1, nodes[i].right_child()]
+/// The most primitives of one kind stored side by side in a leaf.
+const PACK: usize = 8;
+
+/// The binary tree with the run of primitives under each node.
+struct Binary<'a> {
+    nodes: &'a [Node],
+    prims: &'a [PrimId],
+    range: Vec<Range<usize>>,
+}
+
+impl<'a> Binary<'a> {
+    fn new(nodes: &'a [Node], prims: &'a [PrimId]) -> Self {
+        // Children follow their parent, so a backward sweep sees them first.
+        let mut range = vec![0..0; nodes.len()];
+        for i in (0..nodes.len()).rev() {
+            range[i] = if nodes[i].is_leaf() {
+                nodes[i].prim_range()
+            } else {
+                range[i + 1].start..range[nodes[i].right_child()].end
+            };
+        }
+        Binary {
+            nodes,
+            prims,
+            range,
+        }
+    }
+
+    /// The two children of the interior node `i`.
+    fn children(&self, i: usize) -> Vec<usize> {
+        vec![i + 1, self.nodes[i].right_child()]
+    }
+
+    /// The kind of a subtree that becomes one pack: at most [`PACK`] triangles, or
+    /// spheres.
+    fn pack_kind(&self, i: usize) -> Option<PrimKind> {
+        let prims = &self.prims[self.range[i].clone()];
+        let kind = prims.first()?.kind();
+        let packable = matches!(kind, PrimKind::Triangle | PrimKind::Sphere);
+        (packable && prims.len() <= PACK && prims.iter().all(|p| p.kind() == kind)).then_some(kind)
+    }
+
+    /// Nodes that become leaves of the 8-wide tree.
+    fn is_terminal(&self, i: usize) -> bool {
+        self.nodes[i].is_leaf() || self.pack_kind(i).is_some()
+    }
+}
+
+/// Calls `f` with the index of each set bit of `mask`.
+#[inline]
+fn for_lanes(mut mask: u8, mut f: impl FnMut(usize)) {
+    while mask != 0 {
+        f(mask.trailing_zeros() as usize);
+        mask &= mask - 1;
+    }
 }
 
 #[cfg(test)]
@@ -281,17 +453,22 @@ mod tests {
             let mut stack = vec![(0u32, [Vec3::NEG_INFINITY, Vec3::INFINITY])];
             while let Some((child, [lo, hi])) = stack.pop() {
                 if child & LEAF != 0 {
-                    let first = (child & FIRST_MASK) as usize;
-                    for k in 0..self.leaf_prims(child).len() {
-                        seen[first + k] += 1;
+                    let (kind, count, index) = leaf_parts(child);
+                    let ids: Vec<PrimId> = match kind {
+                        TRIANGLES => self.triangle_ids[index][..count].to_vec(),
+                        SPHERES => self.sphere_ids[index][..count].to_vec(),
+                        _ => self.prims[index..index + count].to_vec(),
+                    };
+                    for id in ids {
+                        let k = self.prims.iter().position(|&p| p == id).unwrap();
+                        seen[k] += 1;
                     }
                     continue;
                 }
                 let node = &self.nodes[child as usize];
                 assert!((1..=WIDTH as u32).contains(&node.count));
                 for k in 0..node.count as usize {
-                    let min = Vec3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
-                    let max = Vec3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
+                    let (min, max) = (node.boxes.min.lane(k), node.boxes.max.lane(k));
                     assert!(
                         min.cmpge(lo).all() && max.cmple(hi).all(),
                         "child outside parent"

@@ -1,12 +1,15 @@
 use glam::Vec3;
 
-use super::first_root_in;
-use crate::ray::Ray;
+use super::{first_root_in, first_root_in8, max_num, min_num};
+use crate::ray::{Ray, RayPacket};
+use crate::simd::{F32x8, Mask8, Vec3x8};
 
 /// Slab test against the axis-aligned box `[min, max]`, with `inv_dir = 1 / ray.dir`
 /// computed once per ray. Returns the entry distance, or the exit distance when the
-/// origin is inside (or the entry is before `t_min`). `f32::min`/`max` drop the NaN that
-/// `0 * inf` gives for a ray lying in a slab's plane.
+/// origin is inside (or the entry is before `t_min`). glam's `min`/`max` are
+/// `if a < b { a } else { b }` (and `>`): they drop the NaN that `0 * inf` gives for a
+/// ray lying in a slab's plane when it is `t1` and keep it when it is `t2`, and a NaN
+/// entry or exit is a miss; the SIMD twins follow the same rule.
 pub fn aabb(ray: &Ray, inv_dir: Vec3, min: Vec3, max: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
     let t1 = (min - ray.origin) * inv_dir;
     let t2 = (max - ray.origin) * inv_dir;
@@ -16,6 +19,201 @@ pub fn aabb(ray: &Ray, inv_dir: Vec3, min: Vec3, max: Vec3, t_min: f32, t_max: f
         return None;
     }
     first_root_in(near, far, t_min, t_max)
+}
+
+/// Eight boxes side by side: the primitive boxes of a leaf for [`aabb_leaf`], or the
+/// children of an eight-wide BVH node for [`slab_entry8`].
+///
+/// Unused slots hold [`BoxPack8::PAD`] (NaN corners), which [`aabb_leaf`] never hits:
+/// every slab distance is NaN and so is the entry. No corner values can make a slot
+/// inert for [`slab_entry8`], whose NaN-dropping `min`/`max` start from `[t_min, t_max]`
+/// (NaN slabs are ignored, an inverted or infinite box spans everything, a box at
+/// infinity is entered at `t = inf` when `t_max` is infinite); leave its padding out of
+/// the `active` mask instead.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxPack8 {
+    pub min: Vec3x8,
+    pub max: Vec3x8,
+}
+
+impl BoxPack8 {
+    /// Both corners of a padding slot.
+    pub const PAD: Vec3 = Vec3::NAN;
+
+    /// Packs up to eight `(min, max)` boxes, padding the rest with [`BoxPack8::PAD`].
+    ///
+    /// # Panics
+    /// If given more than eight boxes.
+    pub fn new(boxes: &[(Vec3, Vec3)]) -> Self {
+        assert!(boxes.len() <= 8, "a pack holds at most 8 boxes");
+        let corner = |pick: fn(&(Vec3, Vec3)) -> Vec3| {
+            Vec3x8::from_lanes(std::array::from_fn(|i| {
+                boxes.get(i).map_or(Self::PAD, pick)
+            }))
+        };
+        BoxPack8 {
+            min: corner(|b| b.0),
+            max: corner(|b| b.1),
+        }
+    }
+}
+
+/// [`aabb`] for eight rays (with their `inv_dir`) against one box; lanes outside
+/// `active` miss.
+pub fn aabb_packet(
+    rays: &RayPacket,
+    min: Vec3,
+    max: Vec3,
+    t_min: F32x8,
+    t_max: F32x8,
+    active: Mask8,
+) -> (Mask8, F32x8) {
+    let (hit, t) = aabb_lanes(
+        rays.origin,
+        rays.inv_dir,
+        Vec3x8::splat(min),
+        Vec3x8::splat(max),
+        t_min,
+        t_max,
+    );
+    (hit & active, t)
+}
+
+/// [`aabb`] for one ray against the eight boxes of a pack.
+pub fn aabb_leaf(
+    ray: &Ray,
+    inv_dir: Vec3,
+    pack: &BoxPack8,
+    t_min: f32,
+    t_max: f32,
+) -> (Mask8, F32x8) {
+    aabb_lanes(
+        Vec3x8::splat(ray.origin),
+        Vec3x8::splat(inv_dir),
+        pack.min,
+        pack.max,
+        F32x8::splat(t_min),
+        F32x8::splat(t_max),
+    )
+}
+
+/// The body of [`aabb`], lane by lane, with glam's `min`/`max` rule ([`F32x8::min`]) and
+/// its `max_element` order `max(x, max(y, z))`.
+#[inline(always)]
+fn aabb_lanes(
+    origin: Vec3x8,
+    inv_dir: Vec3x8,
+    min: Vec3x8,
+    max: Vec3x8,
+    t_min: F32x8,
+    t_max: F32x8,
+) -> (Mask8, F32x8) {
+    let t1 = (min - origin) * inv_dir;
+    let t2 = (max - origin) * inv_dir;
+    let (lo, hi) = (
+        Vec3x8 {
+            x: t1.x.min(t2.x),
+            y: t1.y.min(t2.y),
+            z: t1.z.min(t2.z),
+        },
+        Vec3x8 {
+            x: t1.x.max(t2.x),
+            y: t1.y.max(t2.y),
+            z: t1.z.max(t2.z),
+        },
+    );
+    let near = lo.x.max(lo.y.max(lo.z));
+    let far = hi.x.min(hi.y.min(hi.z));
+    let (hit, t) = first_root_in8(near, far, t_min, t_max);
+    (hit & near.le(far), t)
+}
+
+/// The entry distance of a ray into the box `[min, max]` within `[t_min, t_max]` (the
+/// BVH's node test): the slabs clip the interval, and the clipped start is returned if
+/// anything is left. The NaN of `0 * inf` (a ray in a slab's plane) is ignored by
+/// [`min_num`]/[`max_num`], so such a ray passes: the test errs towards visiting, never
+/// towards missing. Ties take the slab's value, so the sign of a zero entry is fixed.
+#[inline]
+pub fn slab_entry(
+    origin: Vec3,
+    inv_dir: Vec3,
+    min: Vec3,
+    max: Vec3,
+    t_min: f32,
+    t_max: f32,
+) -> Option<f32> {
+    let mut near = t_min;
+    let mut far = t_max;
+    for k in 0..3 {
+        let t1 = (min[k] - origin[k]) * inv_dir[k];
+        let t2 = (max[k] - origin[k]) * inv_dir[k];
+        near = max_num(near, min_num(t1, t2));
+        far = min_num(far, max_num(t1, t2));
+    }
+    (near <= far).then_some(near)
+}
+
+/// [`slab_entry`] for eight rays against one box (packet traversal); lanes outside
+/// `active` miss.
+pub fn slab_entry_packet(
+    rays: &RayPacket,
+    min: Vec3,
+    max: Vec3,
+    t_min: F32x8,
+    t_max: F32x8,
+    active: Mask8,
+) -> (Mask8, F32x8) {
+    let (hit, t) = slab_lanes(
+        rays.origin,
+        rays.inv_dir,
+        Vec3x8::splat(min),
+        Vec3x8::splat(max),
+        t_min,
+        t_max,
+    );
+    (hit & active, t)
+}
+
+/// [`slab_entry`] for one ray against eight boxes (the children of an eight-wide node);
+/// lanes outside `active` miss, and padding must be outside it (see [`BoxPack8`]).
+pub fn slab_entry8(
+    origin: Vec3,
+    inv_dir: Vec3,
+    boxes: &BoxPack8,
+    t_min: f32,
+    t_max: f32,
+    active: Mask8,
+) -> (Mask8, F32x8) {
+    let (hit, t) = slab_lanes(
+        Vec3x8::splat(origin),
+        Vec3x8::splat(inv_dir),
+        boxes.min,
+        boxes.max,
+        F32x8::splat(t_min),
+        F32x8::splat(t_max),
+    );
+    (hit & active, t)
+}
+
+/// The body of [`slab_entry`], lane by lane, axes in the same order.
+#[inline(always)]
+fn slab_lanes(
+    origin: Vec3x8,
+    inv_dir: Vec3x8,
+    min: Vec3x8,
+    max: Vec3x8,
+    t_min: F32x8,
+    t_max: F32x8,
+) -> (Mask8, F32x8) {
+    let t1 = (min - origin) * inv_dir;
+    let t2 = (max - origin) * inv_dir;
+    let mut near = t_min;
+    let mut far = t_max;
+    for (a, b) in [(t1.x, t2.x), (t1.y, t2.y), (t1.z, t2.z)] {
+        near = near.max_num(a.min_num(b));
+        far = far.min_num(a.max_num(b));
+    }
+    (near.le(far), near)
 }
 
 /// Outward normal of the face of `[min, max]` nearest to the point `p` (a hit point).

@@ -1,6 +1,7 @@
 use glam::Vec3;
 
-use crate::ray::Ray;
+use crate::ray::{Ray, RayPacket};
+use crate::simd::{F32x8, Mask8, Vec3x8};
 
 /// Ray test against the open (uncapped) cone frustum or cylinder from `base` along the unit
 /// `axis` for `height`, with radius `r_base` at the base and `r_apex` at the far end.
@@ -56,6 +57,60 @@ pub fn cone(
     } else {
         None
     }
+}
+
+/// [`cone`] for eight rays against one cone; lanes outside `active` miss. Both the
+/// linear and the quadratic case are computed and chosen per lane.
+#[allow(clippy::too_many_arguments)] // as `cone`, with the lane mask
+pub fn cone_packet(
+    rays: &RayPacket,
+    base: Vec3,
+    axis: Vec3,
+    height: f32,
+    r_base: f32,
+    r_apex: f32,
+    t_min: F32x8,
+    t_max: F32x8,
+    active: Mask8,
+) -> (Mask8, F32x8) {
+    let zero = F32x8::ZERO;
+    let slope_f = (r_apex - r_base) / height;
+    let (slope, slope2) = (F32x8::splat(slope_f), F32x8::splat(slope_f * slope_f));
+    let (axis, height) = (Vec3x8::splat(axis), F32x8::splat(height));
+    let (origin, dir) = (rays.origin, rays.dir);
+    let offset = origin - Vec3x8::splat(base);
+    let d_axial = dir.dot(axis);
+    let o_axial = offset.dot(axis);
+    let d_perp = dir - axis.scale(d_axial);
+    let o_perp = offset - axis.scale(o_axial);
+    let r_origin = F32x8::splat(r_base) + slope * o_axial;
+    let d_perp2 = d_perp.dot(d_perp);
+    let a = d_perp2 - slope2 * d_axial * d_axial;
+    let half_b = o_perp.dot(d_perp) - slope * d_axial * r_origin;
+    let c = o_perp.dot(o_perp) - r_origin * r_origin;
+
+    let on_surface = |t: F32x8| {
+        let s = o_axial + t * d_axial;
+        t.gt(t_min) & t.lt(t_max) & zero.le(s) & s.le(height)
+    };
+    // Parallel to the side: the linear equation.
+    let linear = a
+        .abs()
+        .le(F32x8::splat(1e-12) * d_perp2.max_num(d_axial * d_axial));
+    let t_line = -c / (F32x8::splat(2.0) * half_b);
+    let hit_line = on_surface(t_line).and_not(half_b.eq(zero));
+    // Otherwise the quadratic, near root first.
+    let disc = half_b * half_b - a * c;
+    let root = disc.sqrt();
+    let (t0, t1) = ((-half_b - root) / a, (-half_b + root) / a);
+    let ordered = t0.le(t1);
+    let (near, far) = (ordered.select(t0, t1), ordered.select(t1, t0));
+    let near_on = on_surface(near);
+    let hit_quad = disc.ge(zero) & (near_on | on_surface(far));
+    let t_quad = near_on.select(near, far);
+
+    let hit = (linear & hit_line) | hit_quad.and_not(linear);
+    (hit & active, linear.select(t_line, t_quad))
 }
 
 /// Outward normal of the cone surface at `p`, the gradient of `|P_perp|^2 - r(s)^2`. At the

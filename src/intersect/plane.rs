@@ -1,6 +1,7 @@
 use glam::Vec3;
 
-use crate::ray::Ray;
+use crate::ray::{Ray, RayPacket};
+use crate::simd::{F32x8, Mask8, Vec3x8};
 
 /// Ray-plane test for the plane `dot(normal, p) = offset`. A ray parallel to the plane
 /// (including one lying in it) misses.
@@ -11,6 +12,23 @@ pub fn plane(ray: &Ray, normal: Vec3, offset: f32, t_min: f32, t_max: f32) -> Op
     }
     let t = (offset - normal.dot(ray.origin)) / denom;
     (t > t_min && t < t_max).then_some(t)
+}
+
+/// [`plane`] for eight rays; lanes outside `active` miss. Planes never enter a BVH leaf,
+/// so there is no leaf kernel.
+pub fn plane_packet(
+    rays: &RayPacket,
+    normal: Vec3,
+    offset: f32,
+    t_min: F32x8,
+    t_max: F32x8,
+    active: Mask8,
+) -> (Mask8, F32x8) {
+    let normal = Vec3x8::splat(normal);
+    let denom = normal.dot(rays.dir);
+    let t = (F32x8::splat(offset) - normal.dot(rays.origin)) / denom;
+    let hit = t.gt(t_min) & t.lt(t_max);
+    (active.and_not(denom.eq(F32x8::ZERO)) & hit, t)
 }
 
 #[cfg(test)]

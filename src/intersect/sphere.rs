@@ -1,7 +1,8 @@
 use glam::Vec3;
 
-use super::first_root_in;
-use crate::ray::Ray;
+use super::{first_root_in, first_root_in8};
+use crate::ray::{Ray, RayPacket};
+use crate::simd::{F32x8, Mask8, Vec3x8};
 
 /// Ray-sphere test. The report's early exit comes first: an origin outside the sphere with
 /// the centre behind it is a miss before the discriminant is computed. The discriminant is
@@ -24,6 +25,95 @@ pub fn sphere(ray: &Ray, centre: Vec3, radius: f32, t_min: f32, t_max: f32) -> O
     let (r0, r1) = (c / q, q);
     let (near, far) = if r0 <= r1 { (r0, r1) } else { (r1, r0) };
     first_root_in(near, far, t_min, t_max)
+}
+
+/// Eight spheres side by side for [`sphere_leaf`]. Unused slots hold
+/// [`SpherePack8::PAD_RADIUS`] (0), which the test rejects for every ray, NaN included.
+#[derive(Clone, Copy, Debug)]
+pub struct SpherePack8 {
+    pub centre: Vec3x8,
+    pub radius: F32x8,
+}
+
+impl SpherePack8 {
+    /// The radius of a padding slot (its centre is the origin): never hit.
+    pub const PAD_RADIUS: f32 = 0.0;
+
+    /// Packs up to eight `(centre, radius)` pairs, padding the rest.
+    ///
+    /// # Panics
+    /// If given more than eight spheres.
+    pub fn new(spheres: &[(Vec3, f32)]) -> Self {
+        assert!(spheres.len() <= 8, "a pack holds at most 8 spheres");
+        let slot = |i: usize| spheres.get(i).copied();
+        SpherePack8 {
+            centre: Vec3x8::from_lanes(std::array::from_fn(|i| {
+                slot(i).map_or(Vec3::ZERO, |s| s.0)
+            })),
+            radius: F32x8::from_array(std::array::from_fn(|i| {
+                slot(i).map_or(Self::PAD_RADIUS, |s| s.1)
+            })),
+        }
+    }
+}
+
+/// [`sphere`] for eight rays against one sphere; lanes outside `active` miss.
+pub fn sphere_packet(
+    rays: &RayPacket,
+    centre: Vec3,
+    radius: f32,
+    t_min: F32x8,
+    t_max: F32x8,
+    active: Mask8,
+) -> (Mask8, F32x8) {
+    let (hit, t) = sphere_lanes(
+        rays.origin,
+        rays.dir,
+        Vec3x8::splat(centre),
+        F32x8::splat(radius),
+        t_min,
+        t_max,
+    );
+    (hit & active, t)
+}
+
+/// [`sphere`] for one ray against the eight spheres of a pack.
+pub fn sphere_leaf(ray: &Ray, pack: &SpherePack8, t_min: f32, t_max: f32) -> (Mask8, F32x8) {
+    sphere_lanes(
+        Vec3x8::splat(ray.origin),
+        Vec3x8::splat(ray.dir),
+        pack.centre,
+        pack.radius,
+        F32x8::splat(t_min),
+        F32x8::splat(t_max),
+    )
+}
+
+/// The body of [`sphere`], lane by lane: both branches are computed and the early exits
+/// become masks.
+#[inline(always)]
+fn sphere_lanes(
+    origin: Vec3x8,
+    dir: Vec3x8,
+    centre: Vec3x8,
+    radius: F32x8,
+    t_min: F32x8,
+    t_max: F32x8,
+) -> (Mask8, F32x8) {
+    let zero = F32x8::ZERO;
+    let oc = centre - origin;
+    let b = oc.dot(dir);
+    let c = oc.dot(oc) - radius * radius;
+    let behind = c.gt(zero) & b.lt(zero);
+    let perpendicular = oc - dir.scale(b);
+    let disc = radius * radius - perpendicular.dot(perpendicular);
+    let real = (disc.ge(zero) & radius.gt(zero)).and_not(behind);
+    let q = b + disc.sqrt().copysign(b);
+    let (r0, r1) = (c / q, q);
+    let ordered = r0.le(r1);
+    let (near, far) = (ordered.select(r0, r1), ordered.select(r1, r0));
+    let (hit, t) = first_root_in8(near, far, t_min, t_max);
+    (hit & real, t)
 }
 
 #[cfg(test)]

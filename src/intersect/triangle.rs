@@ -1,6 +1,7 @@
 use glam::Vec3;
 
-use crate::ray::Ray;
+use crate::ray::{Ray, RayPacket};
+use crate::simd::{F32x8, Mask8, Vec3x8};
 
 /// Distance and barycentric coordinates of a ray-triangle hit: the point is
 /// `(1 - u - v) p0 + u p1 + v p2`.
@@ -40,6 +41,109 @@ pub fn triangle(
     }
     let t = e2.dot(q) * inv_det;
     (t > t_min && t < t_max).then_some(TriangleHit { t, u, v })
+}
+
+/// Eight lanes of [`TriangleHit`]: lane `i` hit when `hit` has it; `t`, `u` and `v` of a
+/// lane that misses are unspecified.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleHit8 {
+    pub hit: Mask8,
+    pub t: F32x8,
+    pub u: F32x8,
+    pub v: F32x8,
+}
+
+/// Eight triangles side by side for [`triangle_leaf`], stored as the scene stores them
+/// (a vertex and two edges). Unused slots have zero edges, as degenerate triangles do,
+/// so their determinant is 0 (or NaN for a NaN ray) and they are never hit.
+#[derive(Clone, Copy, Debug)]
+pub struct TrianglePack8 {
+    pub p0: Vec3x8,
+    pub e1: Vec3x8,
+    pub e2: Vec3x8,
+}
+
+impl TrianglePack8 {
+    /// Packs up to eight `[p0, e1, e2]` triangles, padding the rest with zeros.
+    ///
+    /// # Panics
+    /// If given more than eight triangles.
+    pub fn new(triangles: &[[Vec3; 3]]) -> Self {
+        assert!(triangles.len() <= 8, "a pack holds at most 8 triangles");
+        let field = |k: usize| {
+            Vec3x8::from_lanes(std::array::from_fn(|i| {
+                triangles.get(i).map_or(Vec3::ZERO, |tri| tri[k])
+            }))
+        };
+        TrianglePack8 {
+            p0: field(0),
+            e1: field(1),
+            e2: field(2),
+        }
+    }
+}
+
+/// [`triangle`] for eight rays against one triangle; lanes outside `active` miss.
+pub fn triangle_packet(
+    rays: &RayPacket,
+    p0: Vec3,
+    e1: Vec3,
+    e2: Vec3,
+    t_min: F32x8,
+    t_max: F32x8,
+    active: Mask8,
+) -> TriangleHit8 {
+    let mut hits = triangle_lanes(
+        rays.origin,
+        rays.dir,
+        Vec3x8::splat(p0),
+        Vec3x8::splat(e1),
+        Vec3x8::splat(e2),
+        t_min,
+        t_max,
+    );
+    hits.hit = hits.hit & active;
+    hits
+}
+
+/// [`triangle`] for one ray against the eight triangles of a pack.
+pub fn triangle_leaf(ray: &Ray, pack: &TrianglePack8, t_min: f32, t_max: f32) -> TriangleHit8 {
+    triangle_lanes(
+        Vec3x8::splat(ray.origin),
+        Vec3x8::splat(ray.dir),
+        pack.p0,
+        pack.e1,
+        pack.e2,
+        F32x8::splat(t_min),
+        F32x8::splat(t_max),
+    )
+}
+
+/// The body of [`triangle`], lane by lane, its early exits turned into a mask.
+#[inline(always)]
+fn triangle_lanes(
+    origin: Vec3x8,
+    dir: Vec3x8,
+    p0: Vec3x8,
+    e1: Vec3x8,
+    e2: Vec3x8,
+    t_min: F32x8,
+    t_max: F32x8,
+) -> TriangleHit8 {
+    let (zero, one) = (F32x8::ZERO, F32x8::splat(1.0));
+    let p = dir.cross(e2);
+    let det = e1.dot(p);
+    let mut hit = det.is_finite().and_not(det.eq(zero));
+    let inv_det = one / det;
+    let s = origin - p0;
+    let u = s.dot(p) * inv_det;
+    hit = hit & zero.le(u) & u.le(one);
+    let q = s.cross(e1);
+    let v = dir.dot(q) * inv_det;
+    hit = hit & v.ge(zero) & (u + v).le(one);
+    let t = e2.dot(q) * inv_det;
+    hit = hit & t.gt(t_min) & t.lt(t_max);
+    TriangleHit8 { hit, t, u, v }
 }
 
 #[cfg(test)]

@@ -1,0 +1,434 @@
+//! Eight-lane SIMD types for the intersection kernels. This is the only module that
+//! imports `wide`: kernels see [`F32x8`], [`Mask8`] and [`Vec3x8`] and nothing else, so
+//! the backing crate (or a hand-written fallback) can change here alone.
+//!
+//! Every operation is IEEE-exact lane by lane (`+ - * /` and `sqrt` are correctly
+//! rounded, as their scalar counterparts are) and nothing here fuses a multiply with an
+//! add: the kernels must equal their scalar twins bit for bit, and `mul_add` rounds once
+//! where the scalar code rounds twice.
+
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
+
+use glam::Vec3;
+use wide::f32x8;
+
+/// Eight `f32` lanes.
+#[derive(Clone, Copy, Debug)]
+pub struct F32x8(f32x8);
+
+/// Eight lane flags (each lane all ones or all zeros), from comparisons.
+#[derive(Clone, Copy, Debug)]
+pub struct Mask8(f32x8);
+
+/// Eight 3-vectors as structure of arrays: lane `i` is `(x[i], y[i], z[i])`.
+#[derive(Clone, Copy, Debug)]
+pub struct Vec3x8 {
+    pub x: F32x8,
+    pub y: F32x8,
+    pub z: F32x8,
+}
+
+impl F32x8 {
+    pub const ZERO: F32x8 = F32x8::splat(0.0);
+
+    #[inline]
+    pub const fn splat(value: f32) -> Self {
+        F32x8(f32x8::splat(value))
+    }
+
+    #[inline]
+    pub const fn from_array(lanes: [f32; 8]) -> Self {
+        F32x8(f32x8::new(lanes))
+    }
+
+    #[inline]
+    pub const fn to_array(self) -> [f32; 8] {
+        self.0.to_array()
+    }
+
+    /// Lane-wise `if self < rhs { self } else { rhs }`: the x86 `minps` rule, and glam's
+    /// `Vec3::min`. NaN in either operand, or a tie such as `-0.0` against `0.0`, gives
+    /// `rhs`.
+    #[inline]
+    pub fn min(self, rhs: Self) -> Self {
+        self.lt(rhs).select(self, rhs)
+    }
+
+    /// Lane-wise `if self > rhs { self } else { rhs }` (`maxps`, glam's `Vec3::max`).
+    /// NaN in either operand, or a tie, gives `rhs`.
+    #[inline]
+    pub fn max(self, rhs: Self) -> Self {
+        self.gt(rhs).select(self, rhs)
+    }
+
+    /// The smaller operand, ignoring a NaN one as `f32::min` does; a tie (`-0.0`
+    /// against `0.0`) gives `rhs`, a rule `f32::min` leaves open. The scalar twin is
+    /// `intersect::min_num`.
+    #[inline]
+    pub fn min_num(self, rhs: Self) -> Self {
+        (self.lt(rhs) | rhs.is_nan()).select(self, rhs)
+    }
+
+    /// The larger operand, ignoring a NaN one; a tie gives `rhs`. Scalar twin:
+    /// `intersect::max_num`.
+    #[inline]
+    pub fn max_num(self, rhs: Self) -> Self {
+        (self.gt(rhs) | rhs.is_nan()).select(self, rhs)
+    }
+
+    /// Correctly rounded square root (NaN for negative lanes), as `f32::sqrt`.
+    #[inline]
+    pub fn sqrt(self) -> Self {
+        F32x8(self.0.sqrt())
+    }
+
+    /// Clears the sign bit, as `f32::abs`.
+    #[inline]
+    pub fn abs(self) -> Self {
+        F32x8(self.0.abs())
+    }
+
+    /// The magnitude of `self` with the sign bit of `sign`, as `f32::copysign` (NaN
+    /// operands included: only bits move).
+    #[inline]
+    pub fn copysign(self, sign: Self) -> Self {
+        F32x8(self.0.copysign(sign.0))
+    }
+
+    /// Ordered comparisons: a NaN lane compares false, as in scalar Rust.
+    #[inline]
+    pub fn lt(self, rhs: Self) -> Mask8 {
+        Mask8(self.0.simd_lt(rhs.0))
+    }
+
+    #[inline]
+    pub fn le(self, rhs: Self) -> Mask8 {
+        Mask8(self.0.simd_le(rhs.0))
+    }
+
+    #[inline]
+    pub fn gt(self, rhs: Self) -> Mask8 {
+        Mask8(self.0.simd_gt(rhs.0))
+    }
+
+    #[inline]
+    pub fn ge(self, rhs: Self) -> Mask8 {
+        Mask8(self.0.simd_ge(rhs.0))
+    }
+
+    /// Equality (`-0.0 == 0.0`; NaN equals nothing).
+    #[inline]
+    pub fn eq(self, rhs: Self) -> Mask8 {
+        Mask8(self.0.simd_eq(rhs.0))
+    }
+
+    #[inline]
+    pub fn is_nan(self) -> Mask8 {
+        Mask8(self.0.is_nan())
+    }
+
+    /// Neither NaN nor infinite, as `f32::is_finite`.
+    #[inline]
+    pub fn is_finite(self) -> Mask8 {
+        self.abs().lt(F32x8::splat(f32::INFINITY))
+    }
+}
+
+impl Add for F32x8 {
+    type Output = F32x8;
+    #[inline]
+    fn add(self, rhs: Self) -> Self {
+        F32x8(self.0 + rhs.0)
+    }
+}
+
+impl Sub for F32x8 {
+    type Output = F32x8;
+    #[inline]
+    fn sub(self, rhs: Self) -> Self {
+        F32x8(self.0 - rhs.0)
+    }
+}
+
+impl Mul for F32x8 {
+    type Output = F32x8;
+    #[inline]
+    fn mul(self, rhs: Self) -> Self {
+        F32x8(self.0 * rhs.0)
+    }
+}
+
+impl Div for F32x8 {
+    type Output = F32x8;
+    #[inline]
+    fn div(self, rhs: Self) -> Self {
+        F32x8(self.0 / rhs.0)
+    }
+}
+
+impl Neg for F32x8 {
+    type Output = F32x8;
+    /// Flips the sign bit, as scalar negation does (also for NaN and zero).
+    #[inline]
+    fn neg(self) -> Self {
+        F32x8(-self.0)
+    }
+}
+
+impl Mask8 {
+    pub const ALL: Mask8 = Mask8(f32x8::splat(f32::from_bits(u32::MAX)));
+    pub const NONE: Mask8 = Mask8(f32x8::splat(0.0));
+
+    /// The mask whose lane `i` is set when bit `i` of `bits` is.
+    #[inline]
+    pub fn from_bitmask(bits: u8) -> Self {
+        let lane = |i: u32| f32::from_bits(if bits >> i & 1 == 1 { u32::MAX } else { 0 });
+        Mask8(f32x8::new(std::array::from_fn(|i| lane(i as u32))))
+    }
+
+    /// Bit `i` set when lane `i` is.
+    #[inline]
+    pub fn bitmask(self) -> u8 {
+        self.0.to_bitmask() as u8
+    }
+
+    #[inline]
+    pub fn any(self) -> bool {
+        self.0.any()
+    }
+
+    #[inline]
+    pub fn all(self) -> bool {
+        self.0.all()
+    }
+
+    #[inline]
+    pub fn none(self) -> bool {
+        !self.0.any()
+    }
+
+    /// `self & !rhs`: the lanes of `self` that `rhs` does not have.
+    #[inline]
+    pub fn and_not(self, rhs: Mask8) -> Mask8 {
+        self & !rhs
+    }
+
+    /// Lane-wise `if self { if_true } else { if_false }`.
+    #[inline]
+    pub fn select(self, if_true: F32x8, if_false: F32x8) -> F32x8 {
+        F32x8(self.0.select(if_true.0, if_false.0))
+    }
+}
+
+impl BitAnd for Mask8 {
+    type Output = Mask8;
+    #[inline]
+    fn bitand(self, rhs: Self) -> Self {
+        Mask8(self.0 & rhs.0)
+    }
+}
+
+impl BitOr for Mask8 {
+    type Output = Mask8;
+    #[inline]
+    fn bitor(self, rhs: Self) -> Self {
+        Mask8(self.0 | rhs.0)
+    }
+}
+
+impl Not for Mask8 {
+    type Output = Mask8;
+    #[inline]
+    fn not(self) -> Self {
+        Mask8(!self.0)
+    }
+}
+
+impl Vec3x8 {
+    /// The same vector in every lane.
+    #[inline]
+    pub fn splat(v: Vec3) -> Self {
+        Vec3x8 {
+            x: F32x8::splat(v.x),
+            y: F32x8::splat(v.y),
+            z: F32x8::splat(v.z),
+        }
+    }
+
+    /// Lane `i` from `lanes[i]`.
+    #[inline]
+    pub fn from_lanes(lanes: [Vec3; 8]) -> Self {
+        Vec3x8 {
+            x: F32x8::from_array(lanes.map(|v| v.x)),
+            y: F32x8::from_array(lanes.map(|v| v.y)),
+            z: F32x8::from_array(lanes.map(|v| v.z)),
+        }
+    }
+
+    /// Lane `i` as a `Vec3`.
+    pub fn lane(self, i: usize) -> Vec3 {
+        Vec3::new(
+            self.x.to_array()[i],
+            self.y.to_array()[i],
+            self.z.to_array()[i],
+        )
+    }
+
+    /// `x x' + y y' + z z'`, summed left to right as glam's `Vec3::dot`.
+    #[inline]
+    pub fn dot(self, rhs: Self) -> F32x8 {
+        self.x * rhs.x + self.y * rhs.y + self.z * rhs.z
+    }
+
+    /// The cross product, each component computed as glam's `Vec3::cross` does.
+    #[inline]
+    pub fn cross(self, rhs: Self) -> Self {
+        Vec3x8 {
+            x: self.y * rhs.z - rhs.y * self.z,
+            y: self.z * rhs.x - rhs.z * self.x,
+            z: self.x * rhs.y - rhs.x * self.y,
+        }
+    }
+
+    /// Each component times the lane's scalar `s` (glam's `f32 * Vec3`).
+    #[inline]
+    pub fn scale(self, s: F32x8) -> Self {
+        Vec3x8 {
+            x: s * self.x,
+            y: s * self.y,
+            z: s * self.z,
+        }
+    }
+
+    /// `1 / v` per component, as glam's `Vec3::recip`.
+    #[inline]
+    pub fn recip(self) -> Self {
+        let one = F32x8::splat(1.0);
+        Vec3x8 {
+            x: one / self.x,
+            y: one / self.y,
+            z: one / self.z,
+        }
+    }
+}
+
+impl Sub for Vec3x8 {
+    type Output = Vec3x8;
+    #[inline]
+    fn sub(self, rhs: Self) -> Self {
+        Vec3x8 {
+            x: self.x - rhs.x,
+            y: self.y - rhs.y,
+            z: self.z - rhs.z,
+        }
+    }
+}
+
+impl Mul for Vec3x8 {
+    type Output = Vec3x8;
+    /// Component by component, as glam's `Vec3 * Vec3`.
+    #[inline]
+    fn mul(self, rhs: Self) -> Self {
+        Vec3x8 {
+            x: self.x * rhs.x,
+            y: self.y * rhs.y,
+            z: self.z * rhs.z,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const NAN: f32 = f32::NAN;
+
+    fn bits(v: F32x8) -> [u32; 8] {
+        v.to_array().map(f32::to_bits)
+    }
+
+    fn pairs() -> (F32x8, F32x8) {
+        let a = [NAN, 1.0, NAN, -0.0, 0.0, 2.0, -1.0, f32::INFINITY];
+        let b = [1.0, NAN, NAN, 0.0, -0.0, 3.0, -2.0, f32::NEG_INFINITY];
+        (F32x8::from_array(a), F32x8::from_array(b))
+    }
+
+    /// Every min/max helper against the scalar rule it documents, bit for bit.
+    #[test]
+    fn min_max_follow_their_scalar_rules() {
+        let (a, b) = pairs();
+        let (sa, sb) = (a.to_array(), b.to_array());
+        let lanes = |f: fn(f32, f32) -> f32| std::array::from_fn(|i| f(sa[i], sb[i]).to_bits());
+        assert_eq!(bits(a.min(b)), lanes(|x, y| if x < y { x } else { y }));
+        assert_eq!(bits(a.max(b)), lanes(|x, y| if x > y { x } else { y }));
+        assert_eq!(
+            bits(a.min_num(b)),
+            lanes(|x, y| if x < y || y.is_nan() { x } else { y })
+        );
+        assert_eq!(
+            bits(a.max_num(b)),
+            lanes(|x, y| if x > y || y.is_nan() { x } else { y })
+        );
+    }
+
+    #[test]
+    fn nan_handling_of_min_max() {
+        let (a, b) = pairs();
+        // min/max: NaN on either side gives rhs.
+        assert!(a.min(b).to_array()[0] == 1.0 && a.min(b).to_array()[1].is_nan());
+        assert!(a.max(b).to_array()[0] == 1.0 && a.max(b).to_array()[1].is_nan());
+        // min_num/max_num drop a single NaN from either side, like f32::min/max.
+        for v in [a.min_num(b), a.max_num(b), b.min_num(a), b.max_num(a)] {
+            let v = v.to_array();
+            assert!(v[0] == 1.0 && v[1] == 1.0 && v[2].is_nan());
+        }
+        // Ties give rhs, so the sign of a zero result is defined.
+        assert_eq!(a.min_num(b).to_array()[3].to_bits(), 0.0f32.to_bits());
+        assert_eq!(a.max_num(b).to_array()[4].to_bits(), (-0.0f32).to_bits());
+    }
+
+    #[test]
+    fn comparisons_and_masks() {
+        let (a, b) = pairs();
+        assert_eq!(a.lt(b).bitmask(), 1 << 5);
+        assert_eq!(a.le(b).bitmask(), 1 << 3 | 1 << 4 | 1 << 5);
+        assert_eq!(a.gt(b).bitmask(), 1 << 6 | 1 << 7);
+        assert_eq!(a.ge(b).bitmask(), 1 << 3 | 1 << 4 | 1 << 6 | 1 << 7);
+        assert_eq!(a.eq(b).bitmask(), 1 << 3 | 1 << 4);
+        assert_eq!(a.is_nan().bitmask(), 0b101);
+        assert_eq!(a.is_finite().bitmask(), 0b0111_1010);
+        let m = Mask8::from_bitmask(0b1010_0110);
+        assert_eq!(m.bitmask(), 0b1010_0110);
+        assert_eq!((m & Mask8::from_bitmask(0b11)).bitmask(), 0b10);
+        assert_eq!((m | Mask8::from_bitmask(0b1)).bitmask(), 0b1010_0111);
+        assert_eq!(m.and_not(Mask8::from_bitmask(0b110)).bitmask(), 0b1010_0000);
+        assert_eq!((!m).bitmask(), 0b0101_1001);
+        assert!(m.any() && !m.all() && !m.none());
+        assert!(Mask8::ALL.all() && Mask8::NONE.none());
+        let picked = m.select(F32x8::splat(1.0), F32x8::splat(2.0)).to_array();
+        assert_eq!(picked, [2.0, 1.0, 1.0, 2.0, 2.0, 1.0, 2.0, 1.0]);
+    }
+
+    #[test]
+    fn sign_and_root_helpers_match_scalar() {
+        let (a, b) = pairs();
+        let (sa, sb) = (a.to_array(), b.to_array());
+        let each = |f: &dyn Fn(f32, f32) -> f32| -> [u32; 8] {
+            std::array::from_fn(|i| f(sa[i], sb[i]).to_bits())
+        };
+        assert_eq!(bits(a.copysign(b)), each(&|x, y| x.copysign(y)));
+        assert_eq!(bits(a.abs()), each(&|x, _| x.abs()));
+        assert_eq!(bits(b.sqrt()), each(&|_, y| y.sqrt()));
+        assert_eq!(bits(-a), each(&|x, _| -x));
+    }
+
+    #[test]
+    fn dot_and_cross_match_glam() {
+        let u = Vec3::new(1.5, -2.25, 1e-3);
+        let v = Vec3::new(-0.7, 3.1, 7.9);
+        let (a, b) = (Vec3x8::splat(u), Vec3x8::splat(v));
+        assert_eq!(a.dot(b).to_array()[3].to_bits(), u.dot(v).to_bits());
+        assert_eq!(a.cross(b).lane(5), u.cross(v));
+        assert_eq!(a.recip().lane(0), u.recip());
+    }
+}

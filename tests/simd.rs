@@ -1,0 +1,349 @@
+//! Every SIMD kernel against its scalar twin, lane for lane and bit for bit: the same hit
+//! or miss and the same `t` (and `u`, `v`) bits, on random primitives and rays that
+//! include NaN, infinite and zero directions, origins inside primitives and in slab
+//! planes, degenerate triangles, zero radii and random active masks. Inactive lanes and
+//! padding slots must miss.
+
+use glam::Vec3;
+use p3trace::intersect::{self, BoxPack8, SpherePack8, TrianglePack8};
+use p3trace::ray::{Ray, RayPacket};
+use p3trace::simd::{F32x8, Mask8};
+use proptest::prelude::*;
+
+const NAN: f32 = f32::NAN;
+const INF: f32 = f32::INFINITY;
+
+/// Mostly ordinary values, often small integers (so that origins fall on the planes of
+/// integer boxes), sometimes zeros of both signs, infinities and NaN.
+fn coord() -> impl Strategy<Value = f32> {
+    prop_oneof![
+        8 => -6.0f32..6.0,
+        3 => (-3i32..=3).prop_map(|i| i as f32),
+        1 => prop::sample::select(vec![0.0, -0.0, NAN, INF, -INF, 1e-30, 1e30]),
+    ]
+}
+
+fn point() -> impl Strategy<Value = Vec3> {
+    (coord(), coord(), coord()).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+}
+
+/// Unit directions, axis-aligned ones (zero components: rays in slab planes), and the
+/// degenerate ones: zero, NaN, infinite, not normalised.
+fn direction() -> impl Strategy<Value = Vec3> {
+    let unit = (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0)
+        .prop_map(|(x, y, z)| Vec3::new(x, y, z).normalize_or(Vec3::X));
+    let axis = prop::sample::select(vec![
+        Vec3::X,
+        Vec3::NEG_X,
+        Vec3::Y,
+        Vec3::NEG_Y,
+        Vec3::Z,
+        Vec3::NEG_Z,
+        Vec3::new(1.0, 1.0, 0.0).normalize(),
+        Vec3::new(0.0, -1.0, 1.0).normalize(),
+        Vec3::new(-0.0, 0.0, -1.0),
+    ]);
+    let odd = prop::sample::select(vec![
+        Vec3::ZERO,
+        Vec3::NAN,
+        Vec3::new(NAN, 0.0, 1.0),
+        Vec3::new(INF, 0.0, 0.0),
+        Vec3::new(3.0, -4.0, 0.5),
+    ]);
+    prop_oneof![6 => unit, 3 => axis, 1 => odd]
+}
+
+fn ray() -> impl Strategy<Value = Ray> {
+    (point(), direction(), prop_oneof![Just(0.0f32), 0.0f32..1.0])
+        .prop_map(|(origin, dir, time)| Ray { origin, dir, time })
+}
+
+/// An interval `(t_min, t_max)`, occasionally empty, infinite at both ends or NaN.
+fn interval() -> impl Strategy<Value = (f32, f32)> {
+    let lo = prop::sample::select(vec![0.0, 1e-4, -0.0, 2.0, -INF, -3.0, NAN]);
+    let hi = prop::sample::select(vec![INF, 5.0, 100.0, 1e-4, 0.0, NAN]);
+    (lo, hi)
+}
+
+fn radius() -> impl Strategy<Value = f32> {
+    prop_oneof![
+        4 => 0.0f32..4.0,
+        1 => prop::sample::select(vec![0.0, -1.0, 1.0, 1000.0, NAN, INF]),
+    ]
+}
+
+/// A box: usually ordered corners (often on integer planes), sometimes flat or inverted.
+fn aabb() -> impl Strategy<Value = (Vec3, Vec3)> {
+    (point(), point(), 0u8..4).prop_map(|(a, b, shape)| match shape {
+        0 => (a, a),
+        1 => (b, a),
+        _ => (a.min(b), a.max(b)),
+    })
+}
+
+/// `[p0, e1, e2]`, degenerate now and then (zero or parallel edges).
+fn triangle() -> impl Strategy<Value = [Vec3; 3]> {
+    (point(), point(), point(), 0u8..6).prop_map(|(p0, e1, e2, shape)| match shape {
+        0 => [p0, Vec3::ZERO, Vec3::ZERO],
+        1 => [p0, e1, 2.0 * e1],
+        _ => [p0, e1, e2],
+    })
+}
+
+#[derive(Clone, Debug)]
+struct Packet {
+    rays: [Ray; 8],
+    t_min: [f32; 8],
+    t_max: [f32; 8],
+    active: u8,
+}
+
+fn packet() -> impl Strategy<Value = Packet> {
+    (
+        prop::array::uniform8(ray()),
+        prop::array::uniform8(interval()),
+        any::<u8>(),
+    )
+        .prop_map(|(rays, limits, active)| Packet {
+            rays,
+            t_min: limits.map(|l| l.0),
+            t_max: limits.map(|l| l.1),
+            active,
+        })
+}
+
+impl Packet {
+    fn soa(&self) -> (RayPacket, F32x8, F32x8, Mask8) {
+        (
+            RayPacket::new(&self.rays),
+            F32x8::from_array(self.t_min),
+            F32x8::from_array(self.t_max),
+            Mask8::from_bitmask(self.active),
+        )
+    }
+
+    fn active(&self, lane: usize) -> bool {
+        self.active >> lane & 1 == 1
+    }
+}
+
+/// Lane `lane` of a kernel's answer equals the scalar `expected` bit for bit.
+fn same(what: &str, lane: usize, expected: Option<f32>, hit: Mask8, t: F32x8) {
+    let got = (hit.bitmask() >> lane & 1 == 1).then(|| t.to_array()[lane]);
+    assert_eq!(
+        got.map(f32::to_bits),
+        expected.map(f32::to_bits),
+        "{what}, lane {lane}: kernel {got:?}, scalar {expected:?}"
+    );
+}
+
+/// The scalar answer, or a miss for a lane outside the active mask.
+fn when(active: bool, answer: Option<f32>) -> Option<f32> {
+    answer.filter(|_| active)
+}
+
+const CASES: u32 = 2000;
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(CASES))]
+
+    #[test]
+    fn sphere_packet_equals_scalar(p in packet(), centre in point(), r in radius()) {
+        let (rays, t_min, t_max, active) = p.soa();
+        let (hit, t) = intersect::sphere_packet(&rays, centre, r, t_min, t_max, active);
+        for (i, ray) in p.rays.iter().enumerate() {
+            let scalar = intersect::sphere(ray, centre, r, p.t_min[i], p.t_max[i]);
+            same("sphere", i, when(p.active(i), scalar), hit, t);
+        }
+    }
+
+    #[test]
+    fn triangle_packet_equals_scalar(p in packet(), tri in triangle()) {
+        let (rays, t_min, t_max, active) = p.soa();
+        let [p0, e1, e2] = tri;
+        let hits = intersect::triangle_packet(&rays, p0, e1, e2, t_min, t_max, active);
+        for (i, ray) in p.rays.iter().enumerate() {
+            let scalar = intersect::triangle(ray, p0, e1, e2, p.t_min[i], p.t_max[i])
+                .filter(|_| p.active(i));
+            same("triangle t", i, scalar.map(|h| h.t), hits.hit, hits.t);
+            same("triangle u", i, scalar.map(|h| h.u), hits.hit, hits.u);
+            same("triangle v", i, scalar.map(|h| h.v), hits.hit, hits.v);
+        }
+    }
+
+    #[test]
+    fn aabb_packet_equals_scalar(p in packet(), (lo, hi) in aabb()) {
+        let (rays, t_min, t_max, active) = p.soa();
+        let (hit, t) = intersect::aabb_packet(&rays, lo, hi, t_min, t_max, active);
+        for (i, ray) in p.rays.iter().enumerate() {
+            let scalar =
+                intersect::aabb(ray, ray.dir.recip(), lo, hi, p.t_min[i], p.t_max[i]);
+            same("aabb", i, when(p.active(i), scalar), hit, t);
+        }
+    }
+
+    #[test]
+    fn plane_packet_equals_scalar(p in packet(), normal in direction(), offset in coord()) {
+        let (rays, t_min, t_max, active) = p.soa();
+        let (hit, t) = intersect::plane_packet(&rays, normal, offset, t_min, t_max, active);
+        for (i, ray) in p.rays.iter().enumerate() {
+            let scalar = intersect::plane(ray, normal, offset, p.t_min[i], p.t_max[i]);
+            same("plane", i, when(p.active(i), scalar), hit, t);
+        }
+    }
+
+    #[test]
+    fn cone_packet_equals_scalar(
+        p in packet(),
+        base in point(),
+        axis in direction(),
+        height in prop_oneof![4 => 0.1f32..4.0, 1 => prop::sample::select(vec![0.0, NAN, INF])],
+        r_base in radius(),
+        r_apex in prop_oneof![2 => radius(), 1 => Just(0.0f32)],
+        cylinder in any::<bool>(),
+    ) {
+        let r_apex = if cylinder { r_base } else { r_apex };
+        let (rays, t_min, t_max, active) = p.soa();
+        let (hit, t) = intersect::cone_packet(
+            &rays, base, axis, height, r_base, r_apex, t_min, t_max, active,
+        );
+        for (i, ray) in p.rays.iter().enumerate() {
+            let scalar = intersect::cone(
+                ray, base, axis, height, r_base, r_apex, p.t_min[i], p.t_max[i],
+            );
+            same("cone", i, when(p.active(i), scalar), hit, t);
+        }
+    }
+
+    #[test]
+    fn slab_entry_packet_equals_scalar(p in packet(), (lo, hi) in aabb()) {
+        let (rays, t_min, t_max, active) = p.soa();
+        let (hit, t) = intersect::slab_entry_packet(&rays, lo, hi, t_min, t_max, active);
+        for (i, ray) in p.rays.iter().enumerate() {
+            let scalar = intersect::slab_entry(
+                ray.origin, ray.dir.recip(), lo, hi, p.t_min[i], p.t_max[i],
+            );
+            same("slab entry", i, when(p.active(i), scalar), hit, t);
+        }
+    }
+
+    #[test]
+    fn sphere_leaf_equals_scalar(
+        ray in ray(),
+        (t_min, t_max) in interval(),
+        spheres in prop::collection::vec((point(), radius()), 0..=8),
+    ) {
+        let pack = SpherePack8::new(&spheres);
+        let (hit, t) = intersect::sphere_leaf(&ray, &pack, t_min, t_max);
+        for i in 0..8 {
+            let scalar = spheres
+                .get(i)
+                .and_then(|&(c, r)| intersect::sphere(&ray, c, r, t_min, t_max));
+            same("sphere leaf", i, scalar, hit, t);
+        }
+    }
+
+    #[test]
+    fn triangle_leaf_equals_scalar(
+        ray in ray(),
+        (t_min, t_max) in interval(),
+        triangles in prop::collection::vec(triangle(), 0..=8),
+    ) {
+        let pack = TrianglePack8::new(&triangles);
+        let hits = intersect::triangle_leaf(&ray, &pack, t_min, t_max);
+        for i in 0..8 {
+            let scalar = triangles
+                .get(i)
+                .and_then(|&[p0, e1, e2]| intersect::triangle(&ray, p0, e1, e2, t_min, t_max));
+            same("triangle leaf t", i, scalar.map(|h| h.t), hits.hit, hits.t);
+            same("triangle leaf u", i, scalar.map(|h| h.u), hits.hit, hits.u);
+            same("triangle leaf v", i, scalar.map(|h| h.v), hits.hit, hits.v);
+        }
+    }
+
+    #[test]
+    fn aabb_leaf_equals_scalar(
+        ray in ray(),
+        (t_min, t_max) in interval(),
+        boxes in prop::collection::vec(aabb(), 0..=8),
+    ) {
+        let inv_dir = ray.dir.recip();
+        let pack = BoxPack8::new(&boxes);
+        let (hit, t) = intersect::aabb_leaf(&ray, inv_dir, &pack, t_min, t_max);
+        for i in 0..8 {
+            let scalar = boxes
+                .get(i)
+                .and_then(|&(lo, hi)| intersect::aabb(&ray, inv_dir, lo, hi, t_min, t_max));
+            same("aabb leaf", i, scalar, hit, t);
+        }
+    }
+
+    #[test]
+    fn slab_entry8_equals_scalar(
+        ray in ray(),
+        (t_min, t_max) in interval(),
+        boxes in prop::collection::vec(aabb(), 0..=8),
+        active in any::<u8>(),
+    ) {
+        let inv_dir = ray.dir.recip();
+        let pack = BoxPack8::new(&boxes);
+        // Padding slots are left out of the mask, as a node with fewer children would.
+        let present = ((1u16 << boxes.len()) - 1) as u8;
+        let mask = Mask8::from_bitmask(active & present);
+        let (hit, t) = intersect::slab_entry8(ray.origin, inv_dir, &pack, t_min, t_max, mask);
+        for i in 0..8 {
+            let scalar = boxes
+                .get(i)
+                .filter(|_| active >> i & 1 == 1)
+                .and_then(|&(lo, hi)| {
+                    intersect::slab_entry(ray.origin, inv_dir, lo, hi, t_min, t_max)
+                });
+            same("slab entry8", i, scalar, hit, t);
+        }
+    }
+
+    /// The padding of each pack misses every ray: a pack with no real primitive never hits.
+    #[test]
+    fn padding_is_inert(ray in ray(), (t_min, t_max) in interval()) {
+        let inv_dir = ray.dir.recip();
+        let spheres = intersect::sphere_leaf(&ray, &SpherePack8::new(&[]), t_min, t_max).0;
+        let triangles = intersect::triangle_leaf(&ray, &TrianglePack8::new(&[]), t_min, t_max);
+        let boxes = intersect::aabb_leaf(&ray, inv_dir, &BoxPack8::new(&[]), t_min, t_max).0;
+        prop_assert!(spheres.none() && triangles.hit.none() && boxes.none());
+        // The same slots through the scalar routines.
+        prop_assert!(intersect::sphere(&ray, Vec3::ZERO, SpherePack8::PAD_RADIUS, t_min, t_max).is_none());
+        prop_assert!(intersect::triangle(&ray, Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, t_min, t_max).is_none());
+        prop_assert!(intersect::aabb(&ray, inv_dir, BoxPack8::PAD, BoxPack8::PAD, t_min, t_max).is_none());
+    }
+}
+
+/// A short packet: the missing lanes are NaN rays outside the active mask.
+#[test]
+fn short_packets_leave_the_tail_inactive() {
+    let rays = [Ray::new(Vec3::new(0., 0., -5.), Vec3::Z); 3];
+    let (packet, active) = RayPacket::from_slice(&rays);
+    assert_eq!(active.bitmask(), 0b111);
+    let (hit, _) = intersect::sphere_packet(
+        &packet,
+        Vec3::ZERO,
+        1.0,
+        F32x8::ZERO,
+        F32x8::splat(INF),
+        active,
+    );
+    assert_eq!(hit.bitmask(), 0b111);
+    assert_eq!(RayPacket::from_slice(&[]).1.bitmask(), 0);
+    assert!(RayPacket::from_slice(&[rays[0]; 8]).1.all());
+}
+
+/// Why [`BoxPack8::PAD`] is NaN: the inverted infinite box (`min = +inf`, `max = -inf`)
+/// spans every slab and is hit.
+#[test]
+fn inverted_infinite_box_is_not_inert() {
+    let ray = Ray::new(Vec3::new(0.5, 0.5, 0.5), Vec3::new(1.0, 2.0, 2.0) / 3.0);
+    let (lo, hi) = (Vec3::splat(INF), Vec3::splat(-INF));
+    assert!(intersect::slab_entry(ray.origin, ray.dir.recip(), lo, hi, 0.0, INF).is_some());
+    let pack = BoxPack8::new(&[]);
+    let (hit, _) = intersect::aabb_leaf(&ray, ray.dir.recip(), &pack, 0.0, INF);
+    assert!(hit.none());
+}
