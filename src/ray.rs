@@ -26,6 +26,12 @@ impl Ray {
     pub fn at(&self, t: f32) -> Vec3 {
         self.origin + t * self.dir
     }
+
+    /// A finite origin and a finite, nonzero direction: rays without them meet nothing
+    /// (the intersection routines are not asked to agree on NaN and infinite rays).
+    pub fn is_traceable(&self) -> bool {
+        self.origin.is_finite() && self.dir.is_finite() && self.dir != Vec3::ZERO
+    }
 }
 
 /// Eight rays as structure of arrays, for the packet kernels of [`crate::intersect`]:

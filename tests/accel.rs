@@ -164,8 +164,79 @@ fn ray() -> impl Strategy<Value = (Ray, f32)> {
         })
 }
 
+/// Eight rays for a packet: from one origin (coherent, as primary and shadow rays are) or
+/// from scattered ones, with now and then a lane whose direction is zero, infinite or NaN,
+/// an active mask, and per-lane distances.
+fn packet() -> impl Strategy<Value = ([Ray; 8], u8, [f32; 8])> {
+    let odd_direction = prop_oneof![
+        Just(Vec3::ZERO),
+        Just(Vec3::new(f32::NAN, 0.0, 1.0)),
+        Just(Vec3::new(f32::INFINITY, 0.0, 0.0)),
+    ];
+    let lane_direction = prop_oneof![8 => direction(), 1 => odd_direction];
+    (
+        point(),
+        prop::bool::ANY,
+        [ray(), ray(), ray(), ray(), ray(), ray(), ray(), ray()],
+        [
+            lane_direction.clone(),
+            lane_direction.clone(),
+            lane_direction.clone(),
+            lane_direction.clone(),
+            lane_direction.clone(),
+            lane_direction.clone(),
+            lane_direction.clone(),
+            lane_direction,
+        ],
+        any::<u8>(),
+    )
+        .prop_map(|(origin, coherent, scattered, dirs, active)| {
+            let t_max = scattered.map(|(_, t)| t);
+            let rays = std::array::from_fn(|k| {
+                let (mut ray, _) = scattered[k];
+                if coherent {
+                    ray.origin = Vec3::from_array(origin);
+                }
+                ray.dir = dirs[k];
+                ray
+            });
+            (rays, active, t_max)
+        })
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// Packets change how rays travel, never what they find: each lane of every
+    /// structure's packet queries answers as brute force does for that ray alone, and
+    /// idle lanes answer nothing.
+    #[test]
+    fn packets_answer_as_single_rays(
+        scene in scene(),
+        packets in prop::collection::vec(packet(), 1..6),
+    ) {
+        let g = &scene.geometry;
+        let brute = Tracer::new(g, Accel::None);
+        for options in structures() {
+            let (accel, _) = Accel::build(g, &options);
+            let name = accel.name();
+            let tracer = Tracer::new(g, accel);
+            for (rays, active, t_max) in &packets {
+                let hits = tracer.closest_packet(rays, *active, t_max[0]);
+                let blocked = tracer.occluded_packet(rays, t_max, *active);
+                for k in 0..8 {
+                    let on = active & (1 << k) != 0;
+                    let expected = if on { brute.closest(&rays[k], 0.0, t_max[0]) } else { None };
+                    prop_assert_eq!(hits[k], expected, "{} lane {} closest, {:?}", name, k, rays[k]);
+                    let expected = on && brute.occluded(&rays[k], 0.0, t_max[k]);
+                    prop_assert_eq!(
+                        blocked & (1 << k) != 0, expected,
+                        "{} lane {} occluded, {:?} t_max {}", name, k, rays[k], t_max[k]
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn every_structure_answers_as_brute_force(

@@ -23,6 +23,7 @@ pub use crate::scene::AccelKind;
 use crate::scene::Geometry;
 use bvh::{Bvh, BvhBuild, BvhWidth};
 use grid::Grid;
+use wide::Bvh8;
 
 /// The bounded primitive kinds, in [`PrimId`] order.
 pub const BOUNDED: [PrimKind; 5] = [
@@ -163,6 +164,13 @@ impl ClosestHit {
     }
 }
 
+/// The lanes whose ray [`Ray::is_traceable`], as a bit mask.
+fn traceable(rays: &[Ray; 8]) -> u8 {
+    (0..8)
+        .filter(|&k| rays[k].is_traceable())
+        .fold(0, |mask, k| mask | 1 << k)
+}
+
 /// Answers ray queries for one scene: the accelerator for bounded primitives, planes apart.
 pub struct Tracer<'s> {
     pub geometry: &'s Geometry,
@@ -176,6 +184,9 @@ impl<'s> Tracer<'s> {
 
     /// The closest hit with `t` in `(t_min, t_max)`.
     pub fn closest(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        if !ray.is_traceable() {
+            return None;
+        }
         let inv_dir = ray.dir.recip();
         let mut closest = ClosestHit::new(t_max);
         let g = self.geometry;
@@ -192,6 +203,9 @@ impl<'s> Tracer<'s> {
 
     /// Whether anything blocks the ray within `(t_min, t_max)`.
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        if !ray.is_traceable() {
+            return false;
+        }
         let inv_dir = ray.dir.recip();
         let g = self.geometry;
         self.closest_plane(ray, inv_dir, t_min, t_max).is_some()
@@ -203,20 +217,59 @@ impl<'s> Tracer<'s> {
     }
 
     /// The closest hit of each ray of `rays` whose bit is set in `active`, with `t` in
-    /// `(0, t_max)`; `None` for the other lanes.
+    /// `(0, t_max)`; `None` for the other lanes. The same hits as [`Tracer::closest`]
+    /// gives each ray; the 8-wide BVH traces them as one packet.
     pub fn closest_packet(&self, rays: &[Ray; 8], active: u8, t_max: f32) -> [Option<Hit>; 8] {
+        let active = active & traceable(rays);
+        let Some(wide) = self.wide() else {
+            return std::array::from_fn(|k| {
+                (active & (1 << k) != 0)
+                    .then(|| self.closest(&rays[k], 0.0, t_max))
+                    .flatten()
+            });
+        };
+        let mut closest = [ClosestHit::new(t_max); 8];
+        wide.closest_packet(self.geometry, rays, active, 0.0, &mut closest);
         std::array::from_fn(|k| {
-            (active & (1 << k) != 0)
-                .then(|| self.closest(&rays[k], 0.0, t_max))
-                .flatten()
+            if active & (1 << k) == 0 {
+                return None;
+            }
+            let bounded = closest[k].hit;
+            let t_max = bounded.map_or(t_max, |h| h.t);
+            let ray = &rays[k];
+            self.closest_plane(ray, ray.dir.recip(), 0.0, t_max)
+                .or(bounded)
         })
     }
 
-    /// The lanes of `active` whose ray is blocked within `(0, t_max[k])`, as a bit mask.
+    /// The lanes of `active` whose ray is blocked within `(0, t_max[k])`, as a bit mask:
+    /// the answers of [`Tracer::occluded`], traced as one packet by the 8-wide BVH.
     pub fn occluded_packet(&self, rays: &[Ray; 8], t_max: &[f32; 8], active: u8) -> u8 {
-        (0..8)
-            .filter(|&k| active & (1 << k) != 0 && self.occluded(&rays[k], 0.0, t_max[k]))
-            .fold(0, |mask, k| mask | 1 << k)
+        let active = active & traceable(rays);
+        let by_plane = (0..8)
+            .filter(|&k| {
+                active & (1 << k) != 0
+                    && self
+                        .closest_plane(&rays[k], rays[k].dir.recip(), 0.0, t_max[k])
+                        .is_some()
+            })
+            .fold(0u8, |mask, k| mask | 1 << k);
+        let rest = active & !by_plane;
+        let blocked = match self.wide() {
+            Some(wide) => wide.occluded_packet(self.geometry, rays, rest, 0.0, t_max),
+            None => (0..8)
+                .filter(|&k| rest & (1 << k) != 0 && self.occluded(&rays[k], 0.0, t_max[k]))
+                .fold(0, |mask, k| mask | 1 << k),
+        };
+        by_plane | blocked
+    }
+
+    /// The 8-wide BVH, when the structure is one.
+    fn wide(&self) -> Option<&Bvh8> {
+        match &self.accel {
+            Accel::Bvh(bvh) => bvh.wide(),
+            _ => None,
+        }
     }
 
     fn closest_plane(&self, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {

@@ -20,11 +20,12 @@ use glam::Vec3;
 use super::bvh::Node;
 use super::ClosestHit;
 use crate::intersect::{
-    slab_entry8, sphere_leaf, triangle_leaf, BoxPack8, SpherePack8, TrianglePack8,
+    slab_entry8, slab_entry_packet, sphere_leaf, triangle_leaf, BoxPack8, SpherePack8,
+    TrianglePack8,
 };
-use crate::ray::{Hit, PrimId, PrimKind, Ray};
+use crate::ray::{Hit, PrimId, PrimKind, Ray, RayPacket};
 use crate::scene::Geometry;
-use crate::simd::Mask8;
+use crate::simd::{F32x8, Mask8};
 
 /// Children per node.
 pub const WIDTH: usize = 8;
@@ -307,11 +308,23 @@ impl Bvh8 {
         t_min: f32,
         closest: &mut ClosestHit,
     ) {
-        if self.nodes.is_empty() {
-            return;
+        if !self.nodes.is_empty() {
+            self.closest_from(0, geometry, ray, inv_dir, t_min, closest);
         }
+    }
+
+    /// [`Bvh8::closest`] over the subtree under `start`.
+    fn closest_from(
+        &self,
+        start: ChildRef,
+        geometry: &Geometry,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+        closest: &mut ClosestHit,
+    ) {
         let mut stack = [const { MaybeUninit::<(ChildRef, f32)>::uninit() }; STACK_SIZE];
-        stack[0].write((0, t_min));
+        stack[0].write((start, t_min));
         let mut depth = 1;
         while depth > 0 {
             depth -= 1;
@@ -354,11 +367,21 @@ impl Bvh8 {
         t_min: f32,
         t_max: f32,
     ) -> bool {
-        if self.nodes.is_empty() {
-            return false;
-        }
+        !self.nodes.is_empty() && self.occluded_from(0, geometry, ray, inv_dir, t_min, t_max)
+    }
+
+    /// [`Bvh8::occluded`] over the subtree under `start`.
+    fn occluded_from(
+        &self,
+        start: ChildRef,
+        geometry: &Geometry,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
         let mut stack = [const { MaybeUninit::<ChildRef>::uninit() }; STACK_SIZE];
-        stack[0].write(0);
+        stack[0].write(start);
         let mut depth = 1;
         while depth > 0 {
             depth -= 1;
@@ -381,7 +404,156 @@ impl Bvh8 {
         }
         false
     }
+
+    /// The closest hits of the rays of `rays` whose bit is set in `active`, traced
+    /// together: each node's children are tested against all the packet's rays at once,
+    /// visited nearest first (by the nearest lane's entry) with their lanes and that
+    /// entry on the stack. An entry is skipped when it lies beyond every lane's closest
+    /// hit; a subtree left with few lanes is finished one ray at a time. Each lane's
+    /// answer is the one [`Bvh8::closest`] gives.
+    pub fn closest_packet(
+        &self,
+        geometry: &Geometry,
+        rays: &[Ray; 8],
+        active: u8,
+        t_min: f32,
+        closest: &mut [ClosestHit; 8],
+    ) {
+        if self.nodes.is_empty() || active == 0 {
+            return;
+        }
+        let packet = RayPacket::new(rays);
+        let inv_dir: [Vec3; 8] = std::array::from_fn(|k| packet.inv_dir.lane(k));
+        let lanes_t_min = F32x8::splat(t_min);
+        let limits =
+            |closest: &[ClosestHit; 8]| F32x8::from_array(closest.each_ref().map(|c| c.limit()));
+        let mut limit = limits(closest);
+        let mut stack = [const { MaybeUninit::<(ChildRef, u8, f32)>::uninit() }; STACK_SIZE];
+        stack[0].write((0, active, t_min));
+        let mut depth = 1;
+        while depth > 0 {
+            depth -= 1;
+            // SAFETY: every slot below `depth` was written before `depth` passed it.
+            let (child, lanes, t_entry) = unsafe { stack[depth].assume_init() };
+            // Beyond every lane's closest hit: nothing closer inside (ties are visited).
+            let farthest = limit.to_array();
+            if (0..8).all(|k| lanes & (1 << k) == 0 || t_entry > farthest[k]) {
+                continue;
+            }
+            if child & LEAF != 0 || lanes.count_ones() <= SINGLE_RAY_LANES {
+                for_lanes(lanes, |k| {
+                    if child & LEAF != 0 {
+                        self.closest_in_leaf(
+                            geometry,
+                            child,
+                            &rays[k],
+                            inv_dir[k],
+                            t_min,
+                            &mut closest[k],
+                        );
+                    } else {
+                        self.closest_from(
+                            child,
+                            geometry,
+                            &rays[k],
+                            inv_dir[k],
+                            t_min,
+                            &mut closest[k],
+                        );
+                    }
+                });
+                limit = limits(closest);
+                continue;
+            }
+            let node = &self.nodes[child as usize];
+            let mask = Mask8::from_bitmask(lanes);
+            let boxes = node.boxes.corners();
+            // (child, its lanes, the nearest lane's entry), for the children entered.
+            let mut entered = [(0u32, 0u8, 0f32); WIDTH];
+            let mut count = 0;
+            for (c, &(min, max)) in boxes.iter().enumerate().take(node.count as usize) {
+                let (hit, t) = slab_entry_packet(&packet, min, max, lanes_t_min, limit, mask);
+                let hit = hit.bitmask();
+                if hit != 0 {
+                    let t = t.to_array();
+                    let mut nearest = f32::INFINITY;
+                    for_lanes(hit, |k| nearest = nearest.min(t[k]));
+                    entered[count] = (node.child[c], hit, nearest);
+                    count += 1;
+                }
+            }
+            let entered = &mut entered[..count];
+            // Farthest first on the stack, so the nearest is popped next.
+            entered.sort_unstable_by(|a, b| b.2.total_cmp(&a.2));
+            for &e in entered.iter() {
+                stack[depth].write(e);
+                depth += 1;
+            }
+        }
+    }
+
+    /// The lanes of `active` whose ray is blocked within `(t_min, t_max[k])`, as a bit
+    /// mask, the rays traced together as in [`Bvh8::closest_packet`].
+    pub fn occluded_packet(
+        &self,
+        geometry: &Geometry,
+        rays: &[Ray; 8],
+        active: u8,
+        t_min: f32,
+        t_max: &[f32; 8],
+    ) -> u8 {
+        if self.nodes.is_empty() || active == 0 {
+            return 0;
+        }
+        let packet = RayPacket::new(rays);
+        let inv_dir: [Vec3; 8] = std::array::from_fn(|k| packet.inv_dir.lane(k));
+        let (lanes_t_min, lanes_t_max) = (F32x8::splat(t_min), F32x8::from_array(*t_max));
+        let mut blocked = 0u8;
+        let mut stack = [const { MaybeUninit::<(ChildRef, u8)>::uninit() }; STACK_SIZE];
+        stack[0].write((0, active));
+        let mut depth = 1;
+        while depth > 0 {
+            depth -= 1;
+            // SAFETY: every slot below `depth` was written before `depth` passed it.
+            let (child, lanes) = unsafe { stack[depth].assume_init() };
+            let lanes = lanes & !blocked;
+            if lanes == 0 {
+                continue;
+            }
+            if child & LEAF != 0 || lanes.count_ones() <= SINGLE_RAY_LANES {
+                for_lanes(lanes, |k| {
+                    let hit = if child & LEAF != 0 {
+                        self.blocks(geometry, child, &rays[k], inv_dir[k], t_min, t_max[k])
+                    } else {
+                        self.occluded_from(child, geometry, &rays[k], inv_dir[k], t_min, t_max[k])
+                    };
+                    if hit {
+                        blocked |= 1 << k;
+                    }
+                });
+                if blocked == active {
+                    break;
+                }
+                continue;
+            }
+            let node = &self.nodes[child as usize];
+            let mask = Mask8::from_bitmask(lanes);
+            let boxes = node.boxes.corners();
+            for (c, &(min, max)) in boxes.iter().enumerate().take(node.count as usize) {
+                let (hit, _) = slab_entry_packet(&packet, min, max, lanes_t_min, lanes_t_max, mask);
+                let hit = hit.bitmask();
+                if hit != 0 {
+                    stack[depth].write((node.child[c], hit));
+                    depth += 1;
+                }
+            }
+        }
+        blocked
+    }
 }
+
+/// A packet whose lanes in a subtree drop to this many finishes it one ray at a time.
+const SINGLE_RAY_LANES: u32 = 2;
 
 /// The most primitives of one kind stored side by side in a leaf.
 const PACK: usize = 8;

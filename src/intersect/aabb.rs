@@ -44,6 +44,18 @@ impl BoxPack8 {
     ///
     /// # Panics
     /// If given more than eight boxes.
+    /// Each slot's `(min, max)` corners.
+    #[inline]
+    pub fn corners(&self) -> [(Vec3, Vec3); 8] {
+        let [lo, hi] = [self.min, self.max].map(|v| [v.x, v.y, v.z].map(|c| c.to_array()));
+        std::array::from_fn(|k| {
+            (
+                Vec3::new(lo[0][k], lo[1][k], lo[2][k]),
+                Vec3::new(hi[0][k], hi[1][k], hi[2][k]),
+            )
+        })
+    }
+
     pub fn new(boxes: &[(Vec3, Vec3)]) -> Self {
         assert!(boxes.len() <= 8, "a pack holds at most 8 boxes");
         let corner = |pick: fn(&(Vec3, Vec3)) -> Vec3| {
