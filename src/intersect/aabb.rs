@@ -1,6 +1,6 @@
 use glam::Vec3;
 
-use super::{first_root_in, first_root_in8, max_num, min_num};
+use super::{first_root_in, first_root_in8};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -26,7 +26,7 @@ pub fn aabb(ray: &Ray, inv_dir: Vec3, min: Vec3, max: Vec3, t_min: f32, t_max: f
 ///
 /// Unused slots hold [`BoxPack8::PAD`] (NaN corners), which [`aabb_leaf`] never hits:
 /// every slab distance is NaN and so is the entry. No corner values can make a slot
-/// inert for [`slab_entry8`], whose NaN-dropping `min`/`max` start from `[t_min, t_max]`
+/// inert for [`slab_entry8`], whose NaN-dropping clipping starts from `[t_min, t_max]`
 /// (NaN slabs are ignored, an inverted or infinite box spans everything, a box at
 /// infinity is entered at `t = inf` when `t_max` is infinite); leave its padding out of
 /// the `active` mask instead.
@@ -142,10 +142,10 @@ fn aabb_lanes(
 
 /// The entry distance of a ray into the box `[min, max]` within `[t_min, t_max]` (the
 /// BVH's node test): the slabs clip the interval, and the clipped start is returned if
-/// anything is left. The NaN of `0 * inf` (a ray in a slab's plane) is ignored by
-/// [`min_num`]/[`max_num`], so such a ray passes: the test errs towards visiting, never
-/// towards missing. Ties take the slab's value, so the sign of a zero entry is fixed.
-#[inline]
+/// anything is left. `min`/`max` follow `minps`/`maxps` (`a < b ? a : b`), so the NaN of
+/// `0 * inf` (a ray in a slab's plane) comes out as their right operand and is then
+/// dropped against `near`/`far`: such a ray passes, erring towards visiting, never towards
+/// missing. Its SIMD twins use the same rule, instruction for instruction.
 pub fn slab_entry(
     origin: Vec3,
     inv_dir: Vec3,
@@ -154,13 +154,15 @@ pub fn slab_entry(
     t_min: f32,
     t_max: f32,
 ) -> Option<f32> {
+    let lesser = |a: f32, b: f32| if a < b { a } else { b };
+    let greater = |a: f32, b: f32| if a > b { a } else { b };
     let mut near = t_min;
     let mut far = t_max;
     for k in 0..3 {
         let t1 = (min[k] - origin[k]) * inv_dir[k];
         let t2 = (max[k] - origin[k]) * inv_dir[k];
-        near = max_num(near, min_num(t1, t2));
-        far = min_num(far, max_num(t1, t2));
+        near = greater(lesser(t1, t2), near);
+        far = lesser(greater(t1, t2), far);
     }
     (near <= far).then_some(near)
 }
@@ -222,8 +224,10 @@ fn slab_lanes(
     let mut near = t_min;
     let mut far = t_max;
     for (a, b) in [(t1.x, t2.x), (t1.y, t2.y), (t1.z, t2.z)] {
-        near = near.max_num(a.min_num(b));
-        far = far.min_num(a.max_num(b));
+        // The NaN of `0 * inf` comes out of `min`/`max` as their right operand, so it
+        // reaches `near` and `far` on the left, where it is dropped.
+        near = a.min(b).max(near);
+        far = a.max(b).min(far);
     }
     (near.le(far), near)
 }

@@ -1,5 +1,6 @@
 use glam::Vec3;
 
+use super::max_num;
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -36,7 +37,7 @@ pub fn cone(
         t > t_min && t < t_max && (0.0..=height).contains(&s)
     };
     // A ray parallel to the cone's side (or a cylinder's axis) leaves a linear equation.
-    if a.abs() <= 1e-12 * d_perp.dot(d_perp).max(d_axial * d_axial) {
+    if a.abs() <= 1e-12 * max_num(d_perp.dot(d_perp), d_axial * d_axial) {
         if half_b == 0.0 {
             return None;
         }

@@ -52,19 +52,9 @@ fn first_root_in8(near: F32x8, far: F32x8, t_min: F32x8, t_max: F32x8) -> (Mask8
     (near_in | far_in, near_in.select(near, far))
 }
 
-/// The smaller of `a` and `b`, ignoring a NaN operand as `f32::min` does, and `b` on a
-/// tie: `f32::min` may return either zero for `min(-0.0, 0.0)`, which would leave the
-/// SIMD twin ([`F32x8::min_num`]) no fixed answer to equal.
-#[inline]
-pub fn min_num(a: f32, b: f32) -> f32 {
-    if a < b || b.is_nan() {
-        a
-    } else {
-        b
-    }
-}
-
-/// The larger of `a` and `b`, ignoring a NaN operand; `b` on a tie (see [`min_num`]).
+/// The larger of `a` and `b`, ignoring a NaN operand as `f32::max` does, and `b` on a
+/// tie: `f32::max` may return either zero for `max(-0.0, 0.0)`, which would leave the
+/// SIMD twin ([`F32x8::max_num`]) no fixed answer to equal.
 #[inline]
 pub fn max_num(a: f32, b: f32) -> f32 {
     if a > b || b.is_nan() {
