@@ -146,6 +146,7 @@ fn aabb_lanes(
 /// `0 * inf` (a ray in a slab's plane) comes out as their right operand and is then
 /// dropped against `near`/`far`: such a ray passes, erring towards visiting, never towards
 /// missing. Its SIMD twins use the same rule, instruction for instruction.
+#[inline]
 pub fn slab_entry(
     origin: Vec3,
     inv_dir: Vec3,
@@ -169,6 +170,7 @@ pub fn slab_entry(
 
 /// [`slab_entry`] for eight rays against one box (packet traversal); lanes outside
 /// `active` miss.
+#[inline]
 pub fn slab_entry_packet(
     rays: &RayPacket,
     min: Vec3,
@@ -190,6 +192,7 @@ pub fn slab_entry_packet(
 
 /// [`slab_entry`] for one ray against eight boxes (the children of an eight-wide node);
 /// lanes outside `active` miss, and padding must be outside it (see [`BoxPack8`]).
+#[inline]
 pub fn slab_entry8(
     origin: Vec3,
     inv_dir: Vec3,

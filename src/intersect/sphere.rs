@@ -78,6 +78,7 @@ pub fn sphere_packet(
 }
 
 /// [`sphere`] for one ray against the eight spheres of a pack.
+#[inline]
 pub fn sphere_leaf(ray: &Ray, pack: &SpherePack8, t_min: f32, t_max: f32) -> (Mask8, F32x8) {
     sphere_lanes(
         Vec3x8::splat(ray.origin),

@@ -107,6 +107,7 @@ pub fn triangle_packet(
 }
 
 /// [`triangle`] for one ray against the eight triangles of a pack.
+#[inline]
 pub fn triangle_leaf(ray: &Ray, pack: &TrianglePack8, t_min: f32, t_max: f32) -> TriangleHit8 {
     triangle_lanes(
         Vec3x8::splat(ray.origin),
