@@ -7,8 +7,10 @@ pub mod sampler;
 pub mod shade;
 pub mod skybox;
 
+use std::cell::RefCell;
 use std::time::{Duration, Instant};
 
+use bumpalo::Bump;
 use glam::{Vec2, Vec3};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -246,6 +248,12 @@ fn tiles(width: u32, height: u32) -> Vec<Tile> {
     tiles
 }
 
+thread_local! {
+    /// Each worker's scratch memory, reset for every tile: the sample sums and the
+    /// packets' shadow answers never go through the global allocator.
+    static SCRATCH: RefCell<Bump> = RefCell::new(Bump::new());
+}
+
 /// Packets cover blocks of this many pixels across and up.
 const PACKET_WIDTH: u32 = 4;
 const PACKET_HEIGHT: u32 = 2;
@@ -279,7 +287,38 @@ fn render_tile(
         };
         camera.ray(sx, sy, lens, 0.0)
     };
-    let mut sums = vec![Vec3::ZERO; (tile.width * tile.height) as usize];
+    SCRATCH.with_borrow_mut(|arena| {
+        arena.reset();
+        let sums = arena.alloc_slice_fill_copy((tile.width * tile.height) as usize, Vec3::ZERO);
+        let visible = arena.alloc_slice_fill_copy(shader.lights.len(), 0u8);
+        trace_tile(
+            shader,
+            options,
+            tile,
+            k,
+            &sample_ray,
+            sums,
+            visible,
+            &mut rays,
+        );
+        let samples = (k * k) as f32;
+        (sums.iter().map(|&sum| sum / samples).collect(), rays)
+    })
+}
+
+/// Adds the colour of every sample of every pixel of `tile` into `sums` (row by row from
+/// the tile's bottom row), one ray at a time or in packets as `options.mode` says.
+#[allow(clippy::too_many_arguments)] // the tile's setting and its two scratch buffers
+fn trace_tile(
+    shader: &Shader,
+    options: &RenderOptions,
+    tile: Tile,
+    k: u32,
+    sample_ray: &dyn Fn(u32, u32, u32, u32) -> crate::ray::Ray,
+    sums: &mut [Vec3],
+    visible: &mut [u8],
+    rays: &mut u64,
+) {
     match options.mode {
         RenderMode::Scalar => {
             for (i, sum) in sums.iter_mut().enumerate() {
@@ -289,13 +328,12 @@ fn render_tile(
                 );
                 for q in 0..k {
                     for p in 0..k {
-                        *sum += shader.trace(&sample_ray(x, y, p, q), 1, 1.0, &mut rays);
+                        *sum += shader.trace(&sample_ray(x, y, p, q), 1, 1.0, rays);
                     }
                 }
             }
         }
         RenderMode::Packet => {
-            let mut visible = Vec::with_capacity(shader.lights.len());
             for by in (0..tile.height).step_by(PACKET_HEIGHT as usize) {
                 for bx in (0..tile.width).step_by(PACKET_WIDTH as usize) {
                     // Lane l is pixel (bx + l % 4, by + l / 4) of the tile.
@@ -312,8 +350,7 @@ fn render_tile(
                                 let (x, y) = lane_pixel(l as u32).unwrap_or((bx, by));
                                 sample_ray(tile.x + x, tile.y + y, p, q)
                             });
-                            let colours =
-                                shader.trace_packet(&packet, active, &mut visible, &mut rays);
+                            let colours = shader.trace_packet(&packet, active, visible, rays);
                             for (l, colour) in colours.iter().enumerate() {
                                 if let Some((x, y)) = lane_pixel(l as u32) {
                                     sums[(y * tile.width + x) as usize] += *colour;
@@ -325,6 +362,4 @@ fn render_tile(
             }
         }
     }
-    let samples = (k * k) as f32;
-    (sums.into_iter().map(|sum| sum / samples).collect(), rays)
 }

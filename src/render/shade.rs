@@ -132,22 +132,22 @@ impl<'a> Shader<'a> {
 
     /// The colours seen along up to eight primary rays (lanes set in `active`): the same
     /// colours as [`Shader::trace`] gives each, with the primary rays and the first shadow
-    /// rays to each light traced as packets. `visible` is scratch space.
+    /// rays to each light traced as packets. `visible` is scratch space, one byte per
+    /// light sample.
     pub fn trace_packet(
         &self,
         packet: &[Ray; 8],
         active: u8,
-        visible: &mut Vec<u8>,
+        visible: &mut [u8],
         rays: &mut u64,
     ) -> [Vec3; 8] {
         *rays += u64::from(active.count_ones());
         let hits = self.tracer.closest_packet(packet, active, f32::INFINITY);
         // Shadow rays of every lane to light `i`, as one packet; bit k of `visible[i]`
         // says whether lane k sees it.
-        visible.clear();
         let surfaces: [Option<Surface>; 8] =
             std::array::from_fn(|k| hits[k].map(|hit| self.surface(&packet[k], &hit)));
-        for light in &self.lights {
+        for (light, visible) in self.lights.iter().zip(visible.iter_mut()) {
             let mut shadows = [Ray::new(Vec3::ZERO, Vec3::Z); 8];
             let mut distances = [0.0; 8];
             let mut lanes = 0u8;
@@ -163,7 +163,7 @@ impl<'a> Shader<'a> {
                 }
             }
             let blocked = self.tracer.occluded_packet(&shadows, &distances, lanes);
-            visible.push(lanes & !blocked);
+            *visible = lanes & !blocked;
         }
         std::array::from_fn(|k| {
             if active & (1 << k) == 0 {
