@@ -9,11 +9,11 @@
 
 use std::cell::RefCell;
 
-use glam::{UVec3, Vec3};
+use glam::{IVec3, UVec3, Vec3};
 
 use super::bounds::{prim_bounds, Aabb};
 use super::{AccelOptions, ClosestHit, BOUNDED};
-use crate::ray::{PrimId, Ray};
+use crate::ray::{Hit, PrimId, Ray, RayPacket};
 use crate::scene::Geometry;
 
 /// The report's `m`.
@@ -195,54 +195,167 @@ impl Grid {
         t_max: f32,
         mut visit: impl FnMut(&[u32], f32) -> Walk,
     ) {
-        if self.refs.is_empty() {
-            return;
-        }
-        let Some((t_enter, t_leave)) = slab(&self.bounds, ray, inv_dir, t_min, t_max) else {
+        let Some(mut dda) = Dda::start(self, ray, inv_dir, t_min, t_max) else {
             return;
         };
-        let mut t_end = t_leave;
-        let mut cell = self.cell_of(ray.at(t_enter)).as_ivec3();
-        let res = self.resolution.as_ivec3();
-        let step = ray.dir.signum().as_ivec3();
-        // Distance to the next cell boundary along each axis, and between boundaries.
-        let mut t_next = Vec3::INFINITY;
-        let mut t_delta = Vec3::INFINITY;
-        for k in 0..3 {
-            if ray.dir[k] != 0.0 && inv_dir[k].is_finite() {
-                let side = if ray.dir[k] > 0.0 { 1 } else { 0 };
-                let boundary = self.bounds.min[k] + (cell[k] + side) as f32 * self.cell_size[k];
-                t_next[k] = (boundary - ray.origin[k]) * inv_dir[k];
-                t_delta[k] = self.cell_size[k] * inv_dir[k].abs();
-            }
-        }
         loop {
-            let c = self.cell_index(cell.as_uvec3());
-            let cell_refs =
-                &self.refs[self.cell_start[c] as usize..self.cell_start[c + 1] as usize];
-            let t_exit = t_next.min_element();
+            let cell_refs = self.cell_refs(dda.cell);
             if !cell_refs.is_empty() {
-                match visit(cell_refs, t_exit) {
+                match visit(cell_refs, dda.t_exit()) {
                     Walk::Stop => return,
-                    Walk::Continue(limit) => t_end = t_end.min(limit),
+                    Walk::Continue(limit) => dda.t_end = dda.t_end.min(limit),
                 }
             }
-            if !(t_exit <= t_end) {
+            if !dda.advance(self) {
                 return;
             }
-            let k = if t_next.x <= t_next.y && t_next.x <= t_next.z {
-                0
-            } else if t_next.y <= t_next.z {
-                1
-            } else {
-                2
-            };
-            cell[k] += step[k];
-            if cell[k] < 0 || cell[k] >= res[k] {
-                return;
-            }
-            t_next[k] += t_delta[k];
         }
+    }
+
+    /// The closest hits of the rays of `rays` in `active`, as [`Grid::closest`] finds
+    /// each. Each lane walks its own 3D-DDA; at every step the lanes that stand in the
+    /// same cell test its objects together, by the primitives' packet kernels (so a
+    /// coherent packet tests each object once for all its rays). Mailboxing plays no
+    /// part here: it changes how often an object is tested, never the answer.
+    pub fn closest_packet(
+        &self,
+        geometry: &Geometry,
+        rays: &[Ray; 8],
+        active: u8,
+        t_min: f32,
+        closest: &mut [ClosestHit; 8],
+    ) {
+        let packet = RayPacket::new(rays);
+        let packet_inv_dir: [Vec3; 8] = std::array::from_fn(|k| packet.inv_dir.lane(k));
+        let mut walks: [Option<Dda>; 8] = std::array::from_fn(|k| {
+            let ray = &rays[k];
+            (active & (1 << k) != 0)
+                .then(|| Dda::start(self, ray, ray.dir.recip(), t_min, closest[k].limit()))
+                .flatten()
+                .and_then(|dda| self.skip_empty(dda))
+        });
+        loop {
+            let walking = lanes_of(&walks, |_| true);
+            if walking == 0 {
+                return;
+            }
+            for_cell_groups(&walks, walking, |cell, lanes| {
+                if lanes.count_ones() <= SINGLE_RAY_LANES {
+                    for_each_lane(lanes, |k| {
+                        let ray = &rays[k];
+                        for &r in self.cell_refs(cell) {
+                            let prim = self.prims[r as usize];
+                            closest[k].test(geometry, prim, ray, packet_inv_dir[k], t_min);
+                        }
+                    });
+                    return;
+                }
+                // Each lane's bound changes only when it takes a hit.
+                let mut t_max = closest.each_ref().map(|c| c.bound());
+                for &r in self.cell_refs(cell) {
+                    let prim = self.prims[r as usize];
+                    let hits = geometry.intersect_packet(prim, &packet, rays, t_min, &t_max, lanes);
+                    for (k, hit) in hits.into_iter().enumerate() {
+                        if let Some(h) = hit {
+                            let (t, u, v) = (h.t, h.u, h.v);
+                            closest[k].offer(Hit { t, prim, u, v });
+                            t_max[k] = closest[k].bound();
+                        }
+                    }
+                }
+            });
+            for (k, walk) in walks.iter_mut().enumerate() {
+                let Some(dda) = walk else {
+                    continue;
+                };
+                // As `closest`: stop once the closest hit lies in the cells walked.
+                let limit = closest[k].limit();
+                dda.t_end = dda.t_end.min(limit);
+                let ended = limit < dda.t_exit() || !dda.advance(self);
+                *walk = if ended { None } else { self.skip_empty(*dda) };
+            }
+        }
+    }
+
+    /// The lanes of `active` whose ray is blocked within `(t_min, t_max[k])`, walked as
+    /// in [`Grid::closest_packet`].
+    pub fn occluded_packet(
+        &self,
+        geometry: &Geometry,
+        rays: &[Ray; 8],
+        active: u8,
+        t_min: f32,
+        t_max: &[f32; 8],
+    ) -> u8 {
+        let packet = RayPacket::new(rays);
+        let packet_inv_dir: [Vec3; 8] = std::array::from_fn(|k| packet.inv_dir.lane(k));
+        let mut walks: [Option<Dda>; 8] = std::array::from_fn(|k| {
+            let ray = &rays[k];
+            (active & (1 << k) != 0)
+                .then(|| Dda::start(self, ray, ray.dir.recip(), t_min, t_max[k]))
+                .flatten()
+                .and_then(|dda| self.skip_empty(dda))
+        });
+        let mut blocked = 0u8;
+        loop {
+            let walking = lanes_of(&walks, |_| true) & !blocked;
+            if walking == 0 {
+                return blocked;
+            }
+            for_cell_groups(&walks, walking, |cell, lanes| {
+                if lanes.count_ones() <= SINGLE_RAY_LANES {
+                    for_each_lane(lanes, |k| {
+                        let ray = &rays[k];
+                        let hit = self.cell_refs(cell).iter().any(|&r| {
+                            let prim = self.prims[r as usize];
+                            geometry
+                                .intersect(prim, ray, packet_inv_dir[k], t_min, t_max[k])
+                                .is_some()
+                        });
+                        if hit {
+                            blocked |= 1 << k;
+                        }
+                    });
+                    return;
+                }
+                for &r in self.cell_refs(cell) {
+                    let open = lanes & !blocked;
+                    if open == 0 {
+                        break;
+                    }
+                    let prim = self.prims[r as usize];
+                    let hits = geometry.intersect_packet(prim, &packet, rays, t_min, t_max, open);
+                    for (k, hit) in hits.iter().enumerate() {
+                        if hit.is_some() {
+                            blocked |= 1 << k;
+                        }
+                    }
+                }
+            });
+            for (k, walk) in walks.iter_mut().enumerate() {
+                if let Some(dda) = walk {
+                    let ended = blocked & (1 << k) != 0 || !dda.advance(self);
+                    *walk = if ended { None } else { self.skip_empty(*dda) };
+                }
+            }
+        }
+    }
+
+    /// Walks `dda` on through empty cells; `None` when the walk ends before a cell with
+    /// objects.
+    fn skip_empty(&self, mut dda: Dda) -> Option<Dda> {
+        while self.cell_refs(dda.cell).is_empty() {
+            if !dda.advance(self) {
+                return None;
+            }
+        }
+        Some(dda)
+    }
+
+    /// The objects of cell `cell`, as indices into `prims`.
+    fn cell_refs(&self, cell: IVec3) -> &[u32] {
+        let c = self.cell_index(cell.as_uvec3());
+        &self.refs[self.cell_start[c] as usize..self.cell_start[c + 1] as usize]
     }
 
     pub fn stats(&self) -> Vec<String> {
@@ -269,6 +382,107 @@ impl Grid {
             ),
             format!("memory: {:.2} MiB", memory as f64 / (1 << 20) as f64),
         ]
+    }
+}
+
+/// One ray's 3D-DDA walk through the cells (Amanatides and Woo).
+#[derive(Clone, Copy, Debug)]
+struct Dda {
+    cell: IVec3,
+    step: IVec3,
+    /// Distance to the next cell boundary along each axis, and between boundaries.
+    t_next: Vec3,
+    t_delta: Vec3,
+    /// The walk ends past this distance.
+    t_end: f32,
+}
+
+impl Dda {
+    /// The walk of `ray` within `(t_min, t_max)`, in the cell where it enters the grid
+    /// (or starts inside it); `None` when it misses the grid.
+    fn start(grid: &Grid, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<Dda> {
+        if grid.refs.is_empty() {
+            return None;
+        }
+        let (t_enter, t_leave) = slab(&grid.bounds, ray, inv_dir, t_min, t_max)?;
+        let cell = grid.cell_of(ray.at(t_enter)).as_ivec3();
+        let mut t_next = Vec3::INFINITY;
+        let mut t_delta = Vec3::INFINITY;
+        for k in 0..3 {
+            if ray.dir[k] != 0.0 && inv_dir[k].is_finite() {
+                let side = if ray.dir[k] > 0.0 { 1 } else { 0 };
+                let boundary = grid.bounds.min[k] + (cell[k] + side) as f32 * grid.cell_size[k];
+                t_next[k] = (boundary - ray.origin[k]) * inv_dir[k];
+                t_delta[k] = grid.cell_size[k] * inv_dir[k].abs();
+            }
+        }
+        Some(Dda {
+            cell,
+            step: ray.dir.signum().as_ivec3(),
+            t_next,
+            t_delta,
+            t_end: t_leave,
+        })
+    }
+
+    /// Where the ray leaves the current cell.
+    fn t_exit(&self) -> f32 {
+        self.t_next.min_element()
+    }
+
+    /// Steps into the next cell; `false` when the walk is over (past `t_end`, or out of
+    /// the grid).
+    fn advance(&mut self, grid: &Grid) -> bool {
+        let t_next = self.t_next;
+        if !(t_next.min_element() <= self.t_end) {
+            return false;
+        }
+        let k = if t_next.x <= t_next.y && t_next.x <= t_next.z {
+            0
+        } else if t_next.y <= t_next.z {
+            1
+        } else {
+            2
+        };
+        self.cell[k] += self.step[k];
+        if self.cell[k] < 0 || self.cell[k] >= grid.resolution.as_ivec3()[k] {
+            return false;
+        }
+        self.t_next[k] += self.t_delta[k];
+        true
+    }
+}
+
+/// Lanes sharing a cell test its objects one ray at a time when there are this few: the
+/// packet kernels pay off only for more.
+const SINGLE_RAY_LANES: u32 = 2;
+
+/// Calls `f` with the index of each set bit of `mask`.
+fn for_each_lane(mut mask: u8, mut f: impl FnMut(usize)) {
+    while mask != 0 {
+        f(mask.trailing_zeros() as usize);
+        mask &= mask - 1;
+    }
+}
+
+/// The lanes whose walk goes on and satisfies `keep`, as a bit mask.
+fn lanes_of(walks: &[Option<Dda>; 8], keep: impl Fn(&Dda) -> bool) -> u8 {
+    (0..8)
+        .filter(|&k| walks[k].as_ref().is_some_and(&keep))
+        .fold(0, |mask, k| mask | 1 << k)
+}
+
+/// Calls `visit` once per distinct cell among the walks of `lanes`, with the lanes that
+/// stand in it.
+fn for_cell_groups(walks: &[Option<Dda>; 8], lanes: u8, mut visit: impl FnMut(IVec3, u8)) {
+    let mut left = lanes;
+    while left != 0 {
+        let first = walks[left.trailing_zeros() as usize]
+            .expect("a walking lane")
+            .cell;
+        let group = left & lanes_of(walks, |dda| dda.cell == first);
+        visit(first, group);
+        left &= !group;
     }
 }
 

@@ -218,18 +218,22 @@ impl<'s> Tracer<'s> {
 
     /// The closest hit of each ray of `rays` whose bit is set in `active`, with `t` in
     /// `(0, t_max)`; `None` for the other lanes. The same hits as [`Tracer::closest`]
-    /// gives each ray; the 8-wide BVH traces them as one packet.
+    /// gives each ray; the 8-wide BVH and the grid trace them as one packet.
     pub fn closest_packet(&self, rays: &[Ray; 8], active: u8, t_max: f32) -> [Option<Hit>; 8] {
         let active = active & traceable(rays);
-        let Some(wide) = self.wide() else {
-            return std::array::from_fn(|k| {
-                (active & (1 << k) != 0)
-                    .then(|| self.closest(&rays[k], 0.0, t_max))
-                    .flatten()
-            });
-        };
         let mut closest = [ClosestHit::new(t_max); 8];
-        wide.closest_packet(self.geometry, rays, active, 0.0, &mut closest);
+        let g = self.geometry;
+        match (&self.accel, self.wide()) {
+            (_, Some(wide)) => wide.closest_packet(g, rays, active, 0.0, &mut closest),
+            (Accel::Grid(grid), _) => grid.closest_packet(g, rays, active, 0.0, &mut closest),
+            _ => {
+                return std::array::from_fn(|k| {
+                    (active & (1 << k) != 0)
+                        .then(|| self.closest(&rays[k], 0.0, t_max))
+                        .flatten()
+                })
+            }
+        }
         std::array::from_fn(|k| {
             if active & (1 << k) == 0 {
                 return None;
@@ -243,7 +247,8 @@ impl<'s> Tracer<'s> {
     }
 
     /// The lanes of `active` whose ray is blocked within `(0, t_max[k])`, as a bit mask:
-    /// the answers of [`Tracer::occluded`], traced as one packet by the 8-wide BVH.
+    /// the answers of [`Tracer::occluded`], traced as one packet by the 8-wide BVH and
+    /// the grid.
     pub fn occluded_packet(&self, rays: &[Ray; 8], t_max: &[f32; 8], active: u8) -> u8 {
         let active = active & traceable(rays);
         let by_plane = (0..8)
@@ -255,9 +260,11 @@ impl<'s> Tracer<'s> {
             })
             .fold(0u8, |mask, k| mask | 1 << k);
         let rest = active & !by_plane;
-        let blocked = match self.wide() {
-            Some(wide) => wide.occluded_packet(self.geometry, rays, rest, 0.0, t_max),
-            None => (0..8)
+        let g = self.geometry;
+        let blocked = match (&self.accel, self.wide()) {
+            (_, Some(wide)) => wide.occluded_packet(g, rays, rest, 0.0, t_max),
+            (Accel::Grid(grid), _) => grid.occluded_packet(g, rays, rest, 0.0, t_max),
+            _ => (0..8)
                 .filter(|&k| rest & (1 << k) != 0 && self.occluded(&rays[k], 0.0, t_max[k]))
                 .fold(0, |mask, k| mask | 1 << k),
         };

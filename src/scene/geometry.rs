@@ -7,7 +7,8 @@ use glam::Vec3;
 
 use crate::intersect;
 use crate::intersect::TriangleHit;
-use crate::ray::{PrimId, PrimKind, Ray};
+use crate::ray::{PrimId, PrimKind, Ray, RayPacket};
+use crate::simd::{F32x8, Mask8};
 
 /// Three parallel arrays of coordinates.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -242,6 +243,116 @@ impl Geometry {
                 let p = &self.planes;
                 intersect::plane(ray, p.normal.get(i), p.offset[i], t_min, t_max).map(uv0)
             }
+        }
+    }
+
+    /// [`Geometry::intersect`] for the rays of `packet` (lanes of `rays`) in `active`,
+    /// each within `(t_min, t_max[k])`, by the primitive's packet kernel: each lane's
+    /// answer is bit for bit the scalar one. Moving spheres are tested lane by lane.
+    pub fn intersect_packet(
+        &self,
+        prim: PrimId,
+        packet: &RayPacket,
+        rays: &[Ray; 8],
+        t_min: f32,
+        t_max: &[f32; 8],
+        active: u8,
+    ) -> [Option<TriangleHit>; 8] {
+        let i = prim.index();
+        let (lo, hi, mask) = (
+            F32x8::splat(t_min),
+            F32x8::from_array(*t_max),
+            Mask8::from_bitmask(active),
+        );
+        let lanes = |(hit, t): (Mask8, F32x8)| {
+            let (hit, t) = (hit.bitmask(), t.to_array());
+            std::array::from_fn(|k| {
+                (hit & (1 << k) != 0).then(|| TriangleHit {
+                    t: t[k],
+                    u: 0.0,
+                    v: 0.0,
+                })
+            })
+        };
+        match prim.kind() {
+            PrimKind::Sphere => {
+                let s = &self.spheres;
+                lanes(intersect::sphere_packet(
+                    packet,
+                    s.centre.get(i),
+                    s.radius[i],
+                    lo,
+                    hi,
+                    mask,
+                ))
+            }
+            PrimKind::Triangle => {
+                let tr = &self.triangles;
+                let h = intersect::triangle_packet(
+                    packet,
+                    tr.p0.get(i),
+                    tr.e1.get(i),
+                    tr.e2.get(i),
+                    lo,
+                    hi,
+                    mask,
+                );
+                let (hit, t, u, v) = (
+                    h.hit.bitmask(),
+                    h.t.to_array(),
+                    h.u.to_array(),
+                    h.v.to_array(),
+                );
+                std::array::from_fn(|k| {
+                    (hit & (1 << k) != 0).then(|| TriangleHit {
+                        t: t[k],
+                        u: u[k],
+                        v: v[k],
+                    })
+                })
+            }
+            PrimKind::Box => {
+                let b = &self.boxes;
+                lanes(intersect::aabb_packet(
+                    packet,
+                    b.min.get(i),
+                    b.max.get(i),
+                    lo,
+                    hi,
+                    mask,
+                ))
+            }
+            PrimKind::Cone => {
+                let c = &self.cones;
+                lanes(intersect::cone_packet(
+                    packet,
+                    c.base.get(i),
+                    c.axis.get(i),
+                    c.height[i],
+                    c.r_base[i],
+                    c.r_apex[i],
+                    lo,
+                    hi,
+                    mask,
+                ))
+            }
+            PrimKind::Plane => {
+                let p = &self.planes;
+                lanes(intersect::plane_packet(
+                    packet,
+                    p.normal.get(i),
+                    p.offset[i],
+                    lo,
+                    hi,
+                    mask,
+                ))
+            }
+            PrimKind::MovingSphere => std::array::from_fn(|k| {
+                let ray = &rays[k];
+                (active & (1 << k) != 0)
+                    .then(|| self.intersect(prim, ray, ray.dir.recip(), t_min, t_max[k]))
+                    .flatten()
+            }),
         }
     }
 
