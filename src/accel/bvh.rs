@@ -387,12 +387,36 @@ fn grow(nodes: &mut Vec<Node>, items: &mut [Item], offset: usize, depth: usize, 
         return;
     };
     let (left, right) = items.split_at_mut(k);
-    grow(nodes, left, offset, depth + 1, build);
-    let right_index = nodes.len() as u32;
-    grow(nodes, right, offset + k, depth + 1, build);
-    nodes[index].offset = right_index;
+    if left.len() + right.len() > PARALLEL_BUILD {
+        // The two subtrees on two threads, then the right one's nodes appended after
+        // the left one's: the same array as one thread builds.
+        let (_, mut right_nodes) = rayon::join(
+            || grow(nodes, left, offset, depth + 1, build),
+            || {
+                let mut right_nodes = Vec::new();
+                grow(&mut right_nodes, right, offset + k, depth + 1, build);
+                right_nodes
+            },
+        );
+        let right_index = nodes.len() as u32;
+        for node in &mut right_nodes {
+            if node.count == 0 {
+                node.offset += right_index;
+            }
+        }
+        nodes.append(&mut right_nodes);
+        nodes[index].offset = right_index;
+    } else {
+        grow(nodes, left, offset, depth + 1, build);
+        let right_index = nodes.len() as u32;
+        grow(nodes, right, offset + k, depth + 1, build);
+        nodes[index].offset = right_index;
+    }
     nodes[index].count = 0;
 }
+
+/// Subtrees over more primitives than this are built on two threads.
+const PARALLEL_BUILD: usize = 4096;
 
 fn centroid_bounds(items: &[Item]) -> Aabb {
     items.iter().fold(Aabb::EMPTY, |b, it| b.grow(it.centroid))
@@ -517,6 +541,40 @@ mod tests {
                 }
             })
             .collect()
+    }
+
+    #[test]
+    fn parallel_build_gives_the_single_thread_tree() {
+        let text: String = (0..3 * PARALLEL_BUILD)
+            .map(|i| format!("s {} {} {} 0.05\n", i % 17, (i / 17) % 13, i / 221))
+            .collect();
+        let scene = crate::scene::p3f::parse_text(&text).unwrap();
+        let build = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| Bvh::build(&scene.geometry, BvhBuild::Sah, BvhWidth::Two, [0.0; 2]))
+        };
+        let (one, two) = (build(1), build(2));
+        assert_eq!(one.nodes, two.nodes);
+        assert_eq!(one.prims, two.prims);
+        // Every primitive in exactly one leaf, every interior node's children inside it.
+        let mut seen = vec![0; one.prims.len()];
+        for (i, node) in one.nodes.iter().enumerate() {
+            if node.is_leaf() {
+                node.prim_range().for_each(|p| seen[p] += 1);
+            } else {
+                for child in [i + 1, node.right_child()] {
+                    let (outer, inner) = (node.bounds(), one.nodes[child].bounds());
+                    assert!(
+                        outer.union(inner) == outer,
+                        "child {child} outside node {i}"
+                    );
+                }
+            }
+        }
+        assert!(seen.iter().all(|&n| n == 1));
     }
 
     #[test]
