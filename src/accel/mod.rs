@@ -195,8 +195,19 @@ impl<'s> Tracer<'s> {
             Accel::Grid(grid) => grid.closest(g, ray, inv_dir, t_min, &mut closest),
             Accel::Bvh(bvh) => bvh.closest(g, ray, inv_dir, t_min, &mut closest),
         }
-        // Planes come last in id order, so a plane at the same `t` loses the tie.
-        let bounded = closest.hit;
+        self.nearer_plane(ray, inv_dir, t_min, t_max, closest.hit)
+    }
+
+    /// The closest hit among the planes and `bounded`, the accelerator's. Planes come
+    /// last in id order, so a plane at the same `t` loses the tie.
+    fn nearer_plane(
+        &self,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+        bounded: Option<Hit>,
+    ) -> Option<Hit> {
         let t_max = bounded.map_or(t_max, |h| h.t);
         self.closest_plane(ray, inv_dir, t_min, t_max).or(bounded)
     }
@@ -235,14 +246,10 @@ impl<'s> Tracer<'s> {
             }
         }
         std::array::from_fn(|k| {
-            if active & (1 << k) == 0 {
-                return None;
-            }
-            let bounded = closest[k].hit;
-            let t_max = bounded.map_or(t_max, |h| h.t);
             let ray = &rays[k];
-            self.closest_plane(ray, ray.dir.recip(), 0.0, t_max)
-                .or(bounded)
+            (active & (1 << k) != 0)
+                .then(|| self.nearer_plane(ray, ray.dir.recip(), 0.0, t_max, closest[k].hit))
+                .flatten()
         })
     }
 
