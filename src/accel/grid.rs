@@ -12,7 +12,7 @@ use std::cell::RefCell;
 use glam::{IVec3, UVec3, Vec3};
 
 use super::bounds::{prim_bounds, Aabb};
-use super::{AccelOptions, ClosestHit, BOUNDED};
+use super::{for_lanes, AccelOptions, ClosestHit, BOUNDED};
 use crate::ray::{Hit, PrimId, Ray, RayPacket};
 use crate::scene::Geometry;
 
@@ -241,7 +241,7 @@ impl Grid {
             }
             for_cell_groups(&walks, walking, |cell, lanes| {
                 if lanes.count_ones() <= SINGLE_RAY_LANES {
-                    for_each_lane(lanes, |k| {
+                    for_lanes(lanes, |k| {
                         let ray = &rays[k];
                         for &r in self.cell_refs(cell) {
                             let prim = self.prims[r as usize];
@@ -304,7 +304,7 @@ impl Grid {
             }
             for_cell_groups(&walks, walking, |cell, lanes| {
                 if lanes.count_ones() <= SINGLE_RAY_LANES {
-                    for_each_lane(lanes, |k| {
+                    for_lanes(lanes, |k| {
                         let ray = &rays[k];
                         let hit = self.cell_refs(cell).iter().any(|&r| {
                             let prim = self.prims[r as usize];
@@ -456,14 +456,6 @@ impl Dda {
 /// Lanes sharing a cell test its objects one ray at a time when there are this few: the
 /// packet kernels pay off only for more.
 const SINGLE_RAY_LANES: u32 = 2;
-
-/// Calls `f` with the index of each set bit of `mask`.
-fn for_each_lane(mut mask: u8, mut f: impl FnMut(usize)) {
-    while mask != 0 {
-        f(mask.trailing_zeros() as usize);
-        mask &= mask - 1;
-    }
-}
 
 /// The lanes whose walk goes on and satisfies `keep`, as a bit mask.
 fn lanes_of(walks: &[Option<Dda>; 8], keep: impl Fn(&Dda) -> bool) -> u8 {

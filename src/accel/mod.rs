@@ -164,6 +164,15 @@ impl ClosestHit {
     }
 }
 
+/// Calls `f` with the index of each set bit of `mask`, lowest first.
+#[inline]
+fn for_lanes(mut mask: u8, mut f: impl FnMut(usize)) {
+    while mask != 0 {
+        f(mask.trailing_zeros() as usize);
+        mask &= mask - 1;
+    }
+}
+
 /// The lanes whose ray [`Ray::is_traceable`], as a bit mask.
 fn traceable(rays: &[Ray; 8]) -> u8 {
     (0..8)

@@ -18,7 +18,7 @@ use std::ops::Range;
 use glam::Vec3;
 
 use super::bvh::Node;
-use super::ClosestHit;
+use super::{for_lanes, ClosestHit};
 use crate::intersect::{
     slab_entry8, slab_entry_packet, sphere_leaf, triangle_leaf, BoxPack8, SpherePack8,
     TrianglePack8,
@@ -600,15 +600,6 @@ impl<'a> Binary<'a> {
     /// Nodes that become leaves of the 8-wide tree.
     fn is_terminal(&self, i: usize) -> bool {
         self.nodes[i].is_leaf() || self.pack_kind(i).is_some()
-    }
-}
-
-/// Calls `f` with the index of each set bit of `mask`.
-#[inline]
-fn for_lanes(mut mask: u8, mut f: impl FnMut(usize)) {
-    while mask != 0 {
-        f(mask.trailing_zeros() as usize);
-        mask &= mask - 1;
     }
 }
 
