@@ -120,6 +120,7 @@ impl<'a> Shader<'a> {
     pub fn trace(&self, ray: &Ray, depth: u32, ior_here: f32, rays: &mut u64) -> Vec3 {
         *rays += 1;
         let hit = self.tracer.closest(ray, 0.0, f32::INFINITY);
+        let hit = hit.map(|h| (h, self.surface(ray, &h)));
         self.shade(
             ray,
             hit,
@@ -175,28 +176,29 @@ impl<'a> Shader<'a> {
             if active & (1 << k) == 0 {
                 return Vec3::ZERO;
             }
-            self.shade(&packet[k], hits[k], 1, 1.0, rays, &mut |_, _, light| {
+            let hit = hits[k].zip(surfaces[k]);
+            self.shade(&packet[k], hit, 1, 1.0, rays, &mut |_, _, light| {
                 visible[light] & (1 << k) == 0
             })
         })
     }
 
-    /// The colour at `hit` (or the background when there is none) seen along `ray`.
+    /// The colour at `hit` and its surface (or the background when there is none) seen
+    /// along `ray`.
     /// `occluded(shadow_ray, distance, light_index)` answers the shadow queries of this
     /// hit; deeper rays are traced one by one.
     fn shade(
         &self,
         ray: &Ray,
-        hit: Option<Hit>,
+        hit: Option<(Hit, Surface)>,
         depth: u32,
         ior_here: f32,
         rays: &mut u64,
         occluded: &mut dyn FnMut(&Ray, f32, usize) -> bool,
     ) -> Vec3 {
-        let Some(hit) = hit else {
+        let Some((hit, Surface { p, nf, inside })) = hit else {
             return self.background(ray.dir);
         };
-        let Surface { p, nf, inside } = self.surface(ray, &hit);
         let material = &self.scene.materials[self.tracer.geometry.material(hit.prim) as usize];
 
         let mut colour = self.local(ray, p, nf, material, rays, occluded);
