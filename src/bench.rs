@@ -8,7 +8,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::accel::Tracer;
-use crate::ray::{PrimKind, Ray};
+use crate::ray::{lane_mask, PrimKind, Ray};
 use crate::scene::{Light, Scene};
 
 /// The protocol's image width; the height follows the scene's aspect ratio.
@@ -205,6 +205,53 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
     [primary, shadow, reflection]
 }
 
+/// Traces every set along every path with each of `thread_counts`, calling `print` with
+/// a result line per set, path and thread count and a `p3trace-best` line per set. Every
+/// path and thread count must find what the first found; one that does not is an error.
+pub fn run(
+    tracer: &Tracer,
+    sets: &[RaySet],
+    thread_counts: &[usize],
+    reps: u32,
+    mut print: impl FnMut(String),
+) -> Result<(), String> {
+    let paths = [
+        ("p3trace-single", Path::Single),
+        ("p3trace-packet8", Path::Packet),
+    ];
+    let mut first: Vec<SetResult> = Vec::new();
+    for &n in thread_counts {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map_err(|e| format!("cannot start the worker threads: {e}"))?;
+        for (k, set) in sets.iter().enumerate() {
+            let mut best: Option<SetResult> = None;
+            for (api, path) in paths {
+                let r = trace_set(tracer, set, path, &pool, reps)?;
+                print(line(set, api, n, &r));
+                match first.get(k) {
+                    None => first.push(r),
+                    Some(one) if (one.hits, one.tsum) == (r.hits, r.tsum) => {}
+                    Some(one) => {
+                        return Err(format!(
+                            "{}: {api} with {n} threads gave hits {} tsum {:.3}, \
+                             the first path hits {} tsum {:.3}",
+                            set.name, r.hits, r.tsum, one.hits, one.tsum
+                        ))
+                    }
+                }
+                if best.is_none_or(|b| r.best < b.best) {
+                    best = Some(r);
+                }
+            }
+            let best = best.expect("at least one path ran");
+            print(line(set, "p3trace-best", n, &best));
+        }
+    }
+    Ok(())
+}
+
 /// Traces `set` `reps` times on `pool` along `path` and returns the checksums and the
 /// fastest pass. Every pass must give the same checksums; a pass that does not is an error.
 pub fn trace_set(
@@ -276,9 +323,7 @@ fn trace_single(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> [f32; 8] {
 
 /// The answer of each lane of `block`, the block as one packet.
 fn trace_packet(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> [f32; 8] {
-    let active = (0..8)
-        .filter(|&k| block[k] != IDLE)
-        .fold(0u8, |m, k| m | 1 << k);
+    let active = lane_mask(|k| block[k] != IDLE);
     // Idle lanes carry a copy of the first ray and are masked off.
     let lane = |k: usize| if block[k] == IDLE { block[0] } else { block[k] } as usize;
     let rays = std::array::from_fn(|k| set.rays[lane(k)]);
@@ -388,6 +433,21 @@ mod tests {
         for r in &reflection.rays {
             assert!(r.dir.dot(r.origin) > -1e-3);
         }
+    }
+
+    #[test]
+    fn run_prints_every_path_and_the_best_per_set_and_thread_count() {
+        let scene = parse_text(SCENE).unwrap();
+        let tracer = Tracer::new(&scene.geometry, Accel::None);
+        let sets = ray_sets(&scene, &tracer);
+        let mut lines = Vec::new();
+        run(&tracer, &sets, &[1, 2], 1, |l| lines.push(l)).unwrap();
+        assert_eq!(lines.len(), 3 * 3 * 2);
+        let apis: Vec<&str> = lines[..3]
+            .iter()
+            .map(|l| l.split_whitespace().nth(1).unwrap())
+            .collect();
+        assert_eq!(apis, ["p3trace-single", "p3trace-packet8", "p3trace-best"]);
     }
 
     #[test]

@@ -296,42 +296,10 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     if threads > 1 {
         thread_counts.push(threads);
     }
-    let paths = [
-        ("p3trace-single", bench::Path::Single),
-        ("p3trace-packet8", bench::Path::Packet),
-    ];
-    // Every path and thread count must find what the first found.
-    let mut first: Vec<bench::SetResult> = Vec::new();
-    for &n in &thread_counts {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .map_err(|e| Failure::Run(format!("cannot start the worker threads: {e}")))?;
-        for (k, set) in sets.iter().enumerate() {
-            let mut best: Option<bench::SetResult> = None;
-            for (api, path) in paths {
-                let r =
-                    bench::trace_set(&tracer, set, path, &pool, args.reps).map_err(Failure::Run)?;
-                println!("{}", bench::line(set, api, n, &r));
-                match first.get(k) {
-                    None => first.push(r),
-                    Some(one) if (one.hits, one.tsum) == (r.hits, r.tsum) => {}
-                    Some(one) => {
-                        return Err(Failure::Run(format!(
-                            "{}: {api} with {n} threads gave hits {} tsum {:.3}, \
-                             the first path hits {} tsum {:.3}",
-                            set.name, r.hits, r.tsum, one.hits, one.tsum
-                        )))
-                    }
-                }
-                if best.is_none_or(|b| r.best < b.best) {
-                    best = Some(r);
-                }
-            }
-            let best = best.expect("at least one path ran");
-            println!("{}", bench::line(set, "p3trace-best", n, &best));
-        }
-    }
+    bench::run(&tracer, &sets, &thread_counts, args.reps, |line| {
+        println!("{line}")
+    })
+    .map_err(Failure::Run)?;
     Ok(ExitCode::SUCCESS)
 }
 

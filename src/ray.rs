@@ -45,7 +45,17 @@ pub struct RayPacket {
     pub time: F32x8,
 }
 
+/// The bit mask of the lanes `0..8` for which `pred` holds.
+pub fn lane_mask(mut pred: impl FnMut(usize) -> bool) -> u8 {
+    (0..8).filter(|&k| pred(k)).fold(0, |mask, k| mask | 1 << k)
+}
+
 impl RayPacket {
+    /// Each lane's `1 / dir`, as the single-ray routines take it.
+    pub fn inv_dir_lanes(&self) -> [Vec3; 8] {
+        std::array::from_fn(|k| self.inv_dir.lane(k))
+    }
+
     pub fn new(rays: &[Ray; 8]) -> Self {
         let dir = Vec3x8::from_lanes(rays.map(|r| r.dir));
         RayPacket {

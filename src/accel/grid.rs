@@ -13,7 +13,7 @@ use glam::{IVec3, UVec3, Vec3};
 
 use super::bounds::{prim_bounds, Aabb};
 use super::{for_lanes, AccelOptions, ClosestHit, BOUNDED};
-use crate::ray::{Hit, PrimId, Ray, RayPacket};
+use crate::ray::{lane_mask, Hit, PrimId, Ray, RayPacket};
 use crate::scene::Geometry;
 
 /// The report's `m`.
@@ -226,14 +226,9 @@ impl Grid {
         closest: &mut [ClosestHit; 8],
     ) {
         let packet = RayPacket::new(rays);
-        let packet_inv_dir: [Vec3; 8] = std::array::from_fn(|k| packet.inv_dir.lane(k));
-        let mut walks: [Option<Dda>; 8] = std::array::from_fn(|k| {
-            let ray = &rays[k];
-            (active & (1 << k) != 0)
-                .then(|| Dda::start(self, ray, ray.dir.recip(), t_min, closest[k].limit()))
-                .flatten()
-                .and_then(|dda| self.skip_empty(dda))
-        });
+        let packet_inv_dir = packet.inv_dir_lanes();
+        let limits = closest.each_ref().map(|c| c.limit());
+        let mut walks = self.start_walks(rays, &packet_inv_dir, active, t_min, &limits);
         loop {
             let walking = lanes_of(&walks, |_| true);
             if walking == 0 {
@@ -271,8 +266,7 @@ impl Grid {
                 // As `closest`: stop once the closest hit lies in the cells walked.
                 let limit = closest[k].limit();
                 dda.t_end = dda.t_end.min(limit);
-                let ended = limit < dda.t_exit() || !dda.advance(self);
-                *walk = if ended { None } else { self.skip_empty(*dda) };
+                *walk = self.step(*dda, limit < dda.t_exit());
             }
         }
     }
@@ -288,14 +282,8 @@ impl Grid {
         t_max: &[f32; 8],
     ) -> u8 {
         let packet = RayPacket::new(rays);
-        let packet_inv_dir: [Vec3; 8] = std::array::from_fn(|k| packet.inv_dir.lane(k));
-        let mut walks: [Option<Dda>; 8] = std::array::from_fn(|k| {
-            let ray = &rays[k];
-            (active & (1 << k) != 0)
-                .then(|| Dda::start(self, ray, ray.dir.recip(), t_min, t_max[k]))
-                .flatten()
-                .and_then(|dda| self.skip_empty(dda))
-        });
+        let packet_inv_dir = packet.inv_dir_lanes();
+        let mut walks = self.start_walks(rays, &packet_inv_dir, active, t_min, t_max);
         let mut blocked = 0u8;
         loop {
             let walking = lanes_of(&walks, |_| true) & !blocked;
@@ -334,11 +322,37 @@ impl Grid {
             });
             for (k, walk) in walks.iter_mut().enumerate() {
                 if let Some(dda) = walk {
-                    let ended = blocked & (1 << k) != 0 || !dda.advance(self);
-                    *walk = if ended { None } else { self.skip_empty(*dda) };
+                    *walk = self.step(*dda, blocked & (1 << k) != 0);
                 }
             }
         }
+    }
+
+    /// The walks of the lanes of `active` within `(t_min, t_max[k])`, each in its first
+    /// cell with objects (`None` for the others, and where there is no such cell).
+    fn start_walks(
+        &self,
+        rays: &[Ray; 8],
+        inv_dir: &[Vec3; 8],
+        active: u8,
+        t_min: f32,
+        t_max: &[f32; 8],
+    ) -> [Option<Dda>; 8] {
+        std::array::from_fn(|k| {
+            (active & (1 << k) != 0)
+                .then(|| Dda::start(self, &rays[k], inv_dir[k], t_min, t_max[k]))
+                .flatten()
+                .and_then(|dda| self.skip_empty(dda))
+        })
+    }
+
+    /// The walk after `dda`'s cell, in the next cell with objects; `None` when `stop`
+    /// says so or the walk ends.
+    fn step(&self, mut dda: Dda, stop: bool) -> Option<Dda> {
+        if stop || !dda.advance(self) {
+            return None;
+        }
+        self.skip_empty(dda)
     }
 
     /// Walks `dda` on through empty cells; `None` when the walk ends before a cell with
@@ -459,9 +473,7 @@ const SINGLE_RAY_LANES: u32 = 2;
 
 /// The lanes whose walk goes on and satisfies `keep`, as a bit mask.
 fn lanes_of(walks: &[Option<Dda>; 8], keep: impl Fn(&Dda) -> bool) -> u8 {
-    (0..8)
-        .filter(|&k| walks[k].as_ref().is_some_and(&keep))
-        .fold(0, |mask, k| mask | 1 << k)
+    lane_mask(|k| walks[k].as_ref().is_some_and(&keep))
 }
 
 /// Calls `visit` once per distinct cell among the walks of `lanes`, with the lanes that

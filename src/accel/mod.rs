@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
-use crate::ray::{Hit, PrimId, PrimKind, Ray};
+use crate::ray::{lane_mask, Hit, PrimId, PrimKind, Ray};
 pub use crate::scene::AccelKind;
 use crate::scene::Geometry;
 use bvh::{Bvh, BvhBuild, BvhWidth};
@@ -175,9 +175,7 @@ fn for_lanes(mut mask: u8, mut f: impl FnMut(usize)) {
 
 /// The lanes whose ray [`Ray::is_traceable`], as a bit mask.
 fn traceable(rays: &[Ray; 8]) -> u8 {
-    (0..8)
-        .filter(|&k| rays[k].is_traceable())
-        .fold(0, |mask, k| mask | 1 << k)
+    lane_mask(|k| rays[k].is_traceable())
 }
 
 /// Answers ray queries for one scene: the accelerator for bounded primitives, planes apart.
@@ -267,22 +265,18 @@ impl<'s> Tracer<'s> {
     /// the grid.
     pub fn occluded_packet(&self, rays: &[Ray; 8], t_max: &[f32; 8], active: u8) -> u8 {
         let active = active & traceable(rays);
-        let by_plane = (0..8)
-            .filter(|&k| {
-                active & (1 << k) != 0
-                    && self
-                        .closest_plane(&rays[k], rays[k].dir.recip(), 0.0, t_max[k])
-                        .is_some()
-            })
-            .fold(0u8, |mask, k| mask | 1 << k);
+        let by_plane = lane_mask(|k| {
+            active & (1 << k) != 0
+                && self
+                    .closest_plane(&rays[k], rays[k].dir.recip(), 0.0, t_max[k])
+                    .is_some()
+        });
         let rest = active & !by_plane;
         let g = self.geometry;
         let blocked = match (&self.accel, self.wide()) {
             (_, Some(wide)) => wide.occluded_packet(g, rays, rest, 0.0, t_max),
             (Accel::Grid(grid), _) => grid.occluded_packet(g, rays, rest, 0.0, t_max),
-            _ => (0..8)
-                .filter(|&k| rest & (1 << k) != 0 && self.occluded(&rays[k], 0.0, t_max[k]))
-                .fold(0, |mask, k| mask | 1 << k),
+            _ => lane_mask(|k| rest & (1 << k) != 0 && self.occluded(&rays[k], 0.0, t_max[k])),
         };
         by_plane | blocked
     }

@@ -94,7 +94,7 @@ pub struct Bvh8 {
     /// The primitives of each pack, lane by lane (`triangles`, then `spheres`).
     triangle_ids: Vec<[PrimId; 8]>,
     sphere_ids: Vec<[PrimId; 8]>,
-    /// The longest path from the root to a leaf, in nodes; bounds the traversal stack.
+    /// The longest path from the root to a leaf, in nodes (statistics).
     depth: usize,
 }
 
@@ -339,12 +339,10 @@ impl Bvh8 {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let (mut hits, entries) = node.entries(ray.origin, inv_dir, t_min, closest.limit());
+            let (hits, entries) = node.entries(ray.origin, inv_dir, t_min, closest.limit());
             // Push the hit children farthest first, so the nearest is popped next.
             let first = depth;
-            while hits != 0 {
-                let k = hits.trailing_zeros() as usize;
-                hits &= hits - 1;
+            for_lanes(hits, |k| {
                 let t = entries[k];
                 let mut slot = depth;
                 // SAFETY: slots `first..depth` were written in this loop.
@@ -355,7 +353,7 @@ impl Bvh8 {
                 }
                 stack[slot].write((node.child[k], t));
                 depth += 1;
-            }
+            });
         }
     }
 
@@ -394,13 +392,11 @@ impl Bvh8 {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let (mut hits, _) = node.entries(ray.origin, inv_dir, t_min, t_max);
-            while hits != 0 {
-                let k = hits.trailing_zeros() as usize;
-                hits &= hits - 1;
+            let (hits, _) = node.entries(ray.origin, inv_dir, t_min, t_max);
+            for_lanes(hits, |k| {
                 stack[depth].write(node.child[k]);
                 depth += 1;
-            }
+            });
         }
         false
     }
@@ -423,7 +419,7 @@ impl Bvh8 {
             return;
         }
         let packet = RayPacket::new(rays);
-        let inv_dir: [Vec3; 8] = std::array::from_fn(|k| packet.inv_dir.lane(k));
+        let inv_dir = packet.inv_dir_lanes();
         let lanes_t_min = F32x8::splat(t_min);
         let limits =
             |closest: &[ClosestHit; 8]| F32x8::from_array(closest.each_ref().map(|c| c.limit()));
@@ -506,7 +502,7 @@ impl Bvh8 {
             return 0;
         }
         let packet = RayPacket::new(rays);
-        let inv_dir: [Vec3; 8] = std::array::from_fn(|k| packet.inv_dir.lane(k));
+        let inv_dir = packet.inv_dir_lanes();
         let (lanes_t_min, lanes_t_max) = (F32x8::splat(t_min), F32x8::from_array(*t_max));
         let mut blocked = 0u8;
         let mut stack = [const { MaybeUninit::<(ChildRef, u8)>::uninit() }; STACK_SIZE];

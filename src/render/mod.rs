@@ -16,6 +16,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use crate::accel::{Accel, AccelKind, AccelOptions, Tracer};
+use crate::ray::lane_mask;
 use crate::scene::Scene;
 use camera::Camera;
 use film::Film;
@@ -341,9 +342,7 @@ fn trace_tile(
                         let (x, y) = (bx + l % PACKET_WIDTH, by + l / PACKET_WIDTH);
                         (x < tile.width && y < tile.height).then_some((x, y))
                     };
-                    let active = (0..8)
-                        .filter(|&l| lane_pixel(l).is_some())
-                        .fold(0u8, |m, l| m | 1 << l);
+                    let active = lane_mask(|l| lane_pixel(l as u32).is_some());
                     for q in 0..k {
                         for p in 0..k {
                             let packet = std::array::from_fn(|l| {

@@ -184,9 +184,8 @@ impl<'a> Shader<'a> {
     }
 
     /// The colour at `hit` and its surface (or the background when there is none) seen
-    /// along `ray`.
-    /// `occluded(shadow_ray, distance, light_index)` answers the shadow queries of this
-    /// hit; deeper rays are traced one by one.
+    /// along `ray`. `occluded(shadow_ray, distance, light_index)` answers the shadow
+    /// queries of this hit; deeper rays are traced one by one.
     fn shade(
         &self,
         ray: &Ray,
