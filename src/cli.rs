@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use p3trace::render::shade::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
 use p3trace::scene::generate::{mountain, sphereflake};
 
 #[derive(Parser, Debug)]
@@ -151,7 +152,8 @@ pub enum UpAxis {
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// The P3F scene file.
+    /// The P3F scene file, or `random` for the course's random scene (P3F.md section 8)
+    /// laid out by --seed (a file named random is `./random`).
     pub scene: PathBuf,
     /// Output image; the extension picks the format: .png (8-bit), .ppm (8-bit binary
     /// P6) or .hdr (linear floating point). Default: the scene's name with .png, in the
@@ -178,9 +180,42 @@ pub struct RenderArgs {
     /// Worker threads (default: one per core).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub threads: Option<u32>,
-    /// Seed of the random numbers of jittered sampling and the thin lens.
+    /// Seed of every random number: jittered samples, lens, soft-light and fuzz
+    /// points, shutter times (and the layout of the `random` scene).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
+    /// Depth of field: the lens radius in pixel widths, overriding the scene's
+    /// `aperture` (0 is a pinhole).
+    #[arg(long, value_name = "A", value_parser = parse_aperture)]
+    pub aperture: Option<f32>,
+    /// Depth of field: the distance of the focal plane as a multiple of the distance
+    /// from `from` to `at`, overriding the scene's `focal`.
+    #[arg(long, value_name = "F", value_parser = parse_focal)]
+    pub focal: Option<f32>,
+    /// Soft shadows: each point light becomes a square (see --light-size) perpendicular
+    /// to the camera's up vector. With one sample per pixel the square is an n x n grid
+    /// of lights (--light-samples); with k x k samples each sample takes one jittered
+    /// point of cell (p, q) of a k x k grid over it. `al` area lights are always soft.
+    #[arg(long)]
+    pub soft_shadows: bool,
+    /// The side of a soft light's square, in scene units.
+    #[arg(long, value_name = "S", requires = "soft_shadows", value_parser = parse_light_size,
+          default_value_t = DEFAULT_LIGHT_SIZE)]
+    pub light_size: f32,
+    /// n: with one sample per pixel, soft and area lights become n x n point lights.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_LIGHT_GRID,
+          value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub light_samples: u32,
+    /// Fuzzy reflections: a reflected direction r becomes normalize(r + G q), q uniform
+    /// in the unit ball; G in [0, 1], 0 is a mirror. Without a value: 0.2.
+    #[arg(long, value_name = "G", num_args = 0..=1, default_missing_value = "0.2",
+          value_parser = parse_roughness)]
+    pub roughness: Option<f32>,
+    /// Motion blur: the shutter interval; each primary sample takes a time uniform in it,
+    /// and the rays it spawns keep that time. Default: 0,0.3 when the scene has moving
+    /// spheres, else 0,0; T0,T0 renders the instant T0 without blur.
+    #[arg(long, value_name = "T0,T1", value_parser = parse_shutter)]
+    pub shutter: Option<[f32; 2]>,
     /// How rays travel: packet (primary rays and their shadow rays eight at a time) or
     /// scalar (one at a time, the reference). Both give the same image byte for byte.
     #[arg(long, value_enum, value_name = "MODE", default_value_t = ModeChoice::Packet)]
@@ -285,6 +320,52 @@ pub struct CompareArgs {
     pub min_match: f64,
 }
 
+/// A number in `range`; `what` names it in the message.
+fn number_in(
+    text: &str,
+    what: &str,
+    range: impl std::ops::RangeBounds<f32>,
+) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(x) if range.contains(&x) => Ok(x),
+        _ => Err(format!("'{text}' is not {what}")),
+    }
+}
+
+fn parse_aperture(text: &str) -> Result<f32, String> {
+    number_in(text, "an aperture between 0 and 10000 pixels", 0.0..=1e4)
+}
+
+fn parse_focal(text: &str) -> Result<f32, String> {
+    number_in(
+        text,
+        "a focal distance between 0 and 10000 (exclusive of 0)",
+        f32::MIN_POSITIVE..=1e4,
+    )
+}
+
+fn parse_light_size(text: &str) -> Result<f32, String> {
+    number_in(text, "a light size between 0 and 1e6", 0.0..=1e6)
+}
+
+fn parse_roughness(text: &str) -> Result<f32, String> {
+    number_in(text, "a roughness between 0 and 1", 0.0..=1.0)
+}
+
+fn parse_shutter(text: &str) -> Result<[f32; 2], String> {
+    let (open, close) = text
+        .split_once(',')
+        .ok_or_else(|| format!("'{text}' is not T0,T1, such as 0,0.3"))?;
+    let time = |t: &str| number_in(t, "a shutter time between -1e6 and 1e6", -1e6..=1e6);
+    let (open, close) = (time(open)?, time(close)?);
+    if open > close {
+        return Err(format!(
+            "the shutter closes ({close}) before it opens ({open})"
+        ));
+    }
+    Ok([open, close])
+}
+
 fn parse_resolution(text: &str) -> Result<(u32, u32), String> {
     let max = p3trace::scene::p3f::MAX_RESOLUTION;
     let (w, h) = text
@@ -308,6 +389,20 @@ mod tests {
         assert!(parse_resolution("640").is_err());
         assert!(parse_resolution("0x5").is_err());
         assert!(parse_resolution("axb").is_err());
+    }
+
+    #[test]
+    fn effect_values() {
+        assert_eq!(parse_shutter("0,0.3"), Ok([0.0, 0.3]));
+        assert_eq!(parse_shutter(" 1 , 1 "), Ok([1.0, 1.0]));
+        assert!(parse_shutter("0.3,0").is_err());
+        assert!(parse_shutter("0;0.3").is_err());
+        assert!(parse_shutter("nan,1").is_err());
+        assert!(parse_roughness("1.5").is_err());
+        assert!(parse_roughness("-0").is_ok());
+        assert!(parse_focal("0").is_err());
+        assert!(parse_aperture("inf").is_err());
+        assert_eq!(parse_light_size("2"), Ok(2.0));
     }
 
     #[test]

@@ -75,7 +75,23 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     });
     // Refuse a bad output name before spending time on the render.
     OutputFormat::from_path(&output).map_err(Failure::Usage)?;
-    let scene = load_scene(&args.scene)?;
+    let mut scene = if args.scene == Path::new("random") {
+        let text = random::random_scene(args.seed, None);
+        scene::p3f::parse_str(&text, "random", Path::new(""))
+            .map_err(|e| Failure::Run(e.to_string()))?
+    } else {
+        load_scene(&args.scene)?
+    };
+    if let Some(aperture) = args.aperture {
+        scene.camera.aperture = aperture;
+    }
+    if let Some(focal) = args.focal {
+        scene.camera.focal = focal;
+    }
+    scene
+        .camera
+        .validate()
+        .map_err(|e| Failure::Usage(format!("{}: {e}", scene.name)))?;
 
     let mut options = RenderOptions::from_scene(&scene);
     if let Some((w, h)) = args.resolution {
@@ -86,6 +102,12 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     }
     options.shade.max_depth = args.max_depth;
     options.shade.schlick = args.schlick;
+    options.shade.soft_light_size = args.soft_shadows.then_some(args.light_size);
+    options.shade.light_grid = args.light_samples;
+    options.shade.roughness = args.roughness.unwrap_or(0.0);
+    if let Some(shutter) = args.shutter {
+        options.shutter = shutter;
+    }
     options.skybox = !args.no_skybox;
     options.threads = args.threads.map(|n| n as usize);
     options.seed = args.seed;

@@ -55,7 +55,8 @@ pub struct AccelOptions {
     pub grid_density: f32,
     /// Test an object that spans several grid cells only once per ray.
     pub mailbox: bool,
-    /// The shutter interval: moving spheres are bounded over all of it.
+    /// The shutter interval: moving spheres are bounded over all of it (`render` sets
+    /// it from `RenderOptions::shutter`).
     pub shutter: [f32; 2],
 }
 

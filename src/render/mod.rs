@@ -16,12 +16,12 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use crate::accel::{Accel, AccelKind, AccelOptions, Tracer};
-use crate::ray::lane_mask;
+use crate::ray::{lane_mask, Ray};
 use crate::scene::Scene;
 use camera::Camera;
 use film::Film;
 use sampler::{dim, SampleRng};
-use shade::{ShadeOptions, Shader};
+use shade::{Sample, ShadeOptions, Shader};
 use skybox::Skybox;
 
 /// Tiles are square blocks of this many pixels a side: the unit of work of a thread.
@@ -96,7 +96,13 @@ pub struct RenderOptions {
     /// The acceleration structure and how to build it.
     pub accel: AccelOptions,
     pub mode: RenderMode,
+    /// The shutter interval `[open, close]`: each primary sample takes a time uniform in
+    /// it (motion blur, P3F.md 6.5); all at `open` when they are equal.
+    pub shutter: [f32; 2],
 }
+
+/// The shutter of the course's code, used when a scene has moving spheres.
+pub const DEFAULT_SHUTTER: [f32; 2] = [0.0, 0.3];
 
 impl RenderOptions {
     /// The settings the scene file asks for.
@@ -115,6 +121,11 @@ impl RenderOptions {
                 ..AccelOptions::default()
             },
             mode: RenderMode::Packet,
+            shutter: if !scene.geometry.moving_spheres.radius.is_empty() {
+                DEFAULT_SHUTTER
+            } else {
+                [0.0; 2]
+            },
         }
     }
 
@@ -165,10 +176,16 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         },
         _ => None,
     };
-    let (accel, build_time) = Accel::build(&scene.geometry, &options.accel);
+    // Moving spheres are bounded over the whole shutter.
+    let accel_options = AccelOptions {
+        shutter: options.shutter,
+        ..options.accel
+    };
+    let (accel, build_time) = Accel::build(&scene.geometry, &accel_options);
     let (accel_name, accel_stats) = (accel.name(), accel.stats());
     let tracer = Tracer::new(&scene.geometry, accel);
-    let shader = Shader::new(scene, &tracer, skybox.as_ref(), options.shade);
+    let jittered = matches!(options.sampling, Sampling::Jittered(_));
+    let shader = Shader::new(scene, &tracer, skybox.as_ref(), options.shade, jittered);
     let camera = Camera::new(&scene.camera, options.width, options.height);
 
     let pool = rayon::ThreadPoolBuilder::new()
@@ -271,7 +288,8 @@ fn render_tile(
         Sampling::Centre => (1, false),
         Sampling::Jittered(k) => (k, true),
     };
-    // Sample (p, q) of pixel (x, y): the same ray in both modes.
+    // Sample (p, q) of pixel (x, y): the same ray and random numbers in both modes.
+    let [open, close] = options.shutter;
     let sample_ray = |x: u32, y: u32, p: u32, q: u32| {
         let rng = SampleRng::new(y * options.width + x, q * k + p, options.seed);
         let (jx, jy) = if jittered {
@@ -286,7 +304,17 @@ fn render_tile(
         } else {
             Vec2::ZERO
         };
-        camera.ray(sx, sy, lens, 0.0)
+        let time = if close > open {
+            open + (close - open) * rng.uniform(dim::TIME)
+        } else {
+            open
+        };
+        let sample = Sample {
+            rng,
+            cell: [p, q],
+            cells: k,
+        };
+        (camera.ray(sx, sy, lens, time), sample)
     };
     SCRATCH.with_borrow_mut(|arena| {
         arena.reset();
@@ -315,7 +343,7 @@ fn trace_tile(
     options: &RenderOptions,
     tile: Tile,
     k: u32,
-    sample_ray: &dyn Fn(u32, u32, u32, u32) -> crate::ray::Ray,
+    sample_ray: &dyn Fn(u32, u32, u32, u32) -> (Ray, Sample),
     sums: &mut [Vec3],
     visible: &mut [u8],
     rays: &mut u64,
@@ -329,7 +357,8 @@ fn trace_tile(
                 );
                 for q in 0..k {
                     for p in 0..k {
-                        *sum += shader.trace(&sample_ray(x, y, p, q), 1, 1.0, rays);
+                        let (ray, sample) = sample_ray(x, y, p, q);
+                        *sum += shader.trace(&ray, &sample, 1, 1.0, rays);
                     }
                 }
             }
@@ -345,11 +374,17 @@ fn trace_tile(
                     let active = lane_mask(|l| lane_pixel(l as u32).is_some());
                     for q in 0..k {
                         for p in 0..k {
-                            let packet = std::array::from_fn(|l| {
+                            let lanes: [(Ray, Sample); 8] = std::array::from_fn(|l| {
                                 let (x, y) = lane_pixel(l as u32).unwrap_or((bx, by));
                                 sample_ray(tile.x + x, tile.y + y, p, q)
                             });
-                            let colours = shader.trace_packet(&packet, active, visible, rays);
+                            let colours = shader.trace_packet(
+                                &lanes.map(|(ray, _)| ray),
+                                &lanes.map(|(_, sample)| sample),
+                                active,
+                                visible,
+                                rays,
+                            );
                             for (l, colour) in colours.iter().enumerate() {
                                 if let Some((x, y)) = lane_pixel(l as u32) {
                                     sums[(y * tile.width + x) as usize] += *colour;

@@ -1,7 +1,7 @@
 //! Deterministic random numbers: every value is a hash of (pixel, sample, dimension, seed),
 //! so an image does not depend on the number of threads or the order of work.
 
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 
 /// What each random dimension of a sample is used for.
 pub mod dim {
@@ -9,6 +9,13 @@ pub mod dim {
     pub const FILM_Y: u32 = 1;
     pub const LENS_U: u32 = 2;
     pub const LENS_V: u32 = 3;
+    /// The shutter time of a primary sample (motion blur).
+    pub const TIME: u32 = 4;
+    /// The point of the unit ball that tilts a fuzzy reflection.
+    pub const FUZZ: [u32; 3] = [5, 6, 7];
+    /// The jitter of the point of soft light `i` in its cell: dimensions `LIGHT + 2 i`
+    /// and `LIGHT + 2 i + 1`.
+    pub const LIGHT: u32 = 8;
 }
 
 /// The random numbers of one sample of one pixel.
@@ -28,6 +35,24 @@ impl SampleRng {
     pub fn uniform(&self, dim: u32) -> f32 {
         let bits = mix64(self.key ^ (dim as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
         (bits >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    }
+
+    /// The numbers of a ray spawned at a hit (`branch` tells the reflected ray from the
+    /// transmitted one): independent of this ray's and of every other branch's.
+    pub fn spawn(&self, branch: u32) -> Self {
+        SampleRng {
+            key: mix64(self.key ^ u64::from(branch + 1).wrapping_mul(0xD6E8_FEB8_6659_FD93)),
+        }
+    }
+
+    /// A point uniform in the unit ball, from the three dimensions `dims`: a uniform
+    /// direction (z and azimuth) at a radius whose cube is uniform.
+    pub fn unit_ball(&self, dims: [u32; 3]) -> Vec3 {
+        let z = 1.0 - 2.0 * self.uniform(dims[0]);
+        let (s, c) = (std::f32::consts::TAU * self.uniform(dims[1])).sin_cos();
+        let ring = (1.0 - z * z).max(0.0).sqrt();
+        let r = self.uniform(dims[2]).cbrt();
+        Vec3::new(r * ring * c, r * ring * s, r * z)
     }
 
     /// A point uniform in the unit disk, from dimensions `du` and `dv`.
@@ -75,6 +100,31 @@ mod tests {
         for count in buckets {
             assert!((900..1100).contains(&count), "{buckets:?}");
         }
+    }
+
+    #[test]
+    fn ball_points_stay_inside_and_fill_it_evenly() {
+        // A uniform ball has 1/8 of its points within half its radius, and as many in
+        // each half-space.
+        let (mut inner, mut upper, n) = (0, 0, 20_000);
+        for sample in 0..n {
+            let q = SampleRng::new(3, sample, 1).unit_ball(dim::FUZZ);
+            assert!(q.length() <= 1.0 + 1e-6, "{q}");
+            inner += u32::from(q.length() < 0.5);
+            upper += u32::from(q.y > 0.0);
+        }
+        assert!((2300..2700).contains(&inner), "{inner} of {n} within r/2");
+        assert!((9700..10300).contains(&upper), "{upper} of {n} above y = 0");
+    }
+
+    #[test]
+    fn spawned_rays_get_their_own_numbers() {
+        let rng = SampleRng::new(17, 3, 0);
+        let (reflected, transmitted) = (rng.spawn(0), rng.spawn(1));
+        let x = |r: SampleRng| r.uniform(dim::FUZZ[0]);
+        assert_ne!(x(rng), x(reflected));
+        assert_ne!(x(reflected), x(transmitted));
+        assert_eq!(x(reflected), x(rng.spawn(0)));
     }
 
     #[test]

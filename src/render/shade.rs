@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 
+use super::sampler::{dim, SampleRng};
 use super::skybox::Skybox;
 use crate::accel::Tracer;
 use crate::ray::{Hit, Ray};
@@ -13,8 +14,15 @@ use crate::scene::{Light, Material, Scene};
 /// units (the course's value; the course scenes span a few units).
 pub const EPS: f32 = 1e-4;
 
-/// Point samples standing for area lights: an n x n grid over the rectangle (P3F.md 6.3).
-pub const AREA_LIGHT_GRID: u32 = 4;
+/// Lights sampled over an area become this many points a side when a pixel has one
+/// sample (P3F.md 6.3), unless the options say otherwise.
+pub const DEFAULT_LIGHT_GRID: u32 = 4;
+
+/// The side of the square a point light becomes with soft shadows (P3F.md 6.3).
+pub const DEFAULT_LIGHT_SIZE: f32 = 0.5;
+
+/// The report's roughness when fuzzy reflections are asked for without a value.
+pub const DEFAULT_ROUGHNESS: f32 = 0.2;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadeOptions {
@@ -22,6 +30,13 @@ pub struct ShadeOptions {
     pub max_depth: u32,
     /// Schlick's approximation instead of the exact Fresnel equations.
     pub schlick: bool,
+    /// Soft shadows: each point light becomes a square of this side, perpendicular to
+    /// the camera's up vector. `None`: point lights cast hard shadows.
+    pub soft_light_size: Option<f32>,
+    /// Without antialiasing, a light with an area becomes an n x n grid of points.
+    pub light_grid: u32,
+    /// Fuzzy reflections: how far a reflected direction strays (0 is a mirror).
+    pub roughness: f32,
 }
 
 impl Default for ShadeOptions {
@@ -29,6 +44,9 @@ impl Default for ShadeOptions {
         ShadeOptions {
             max_depth: 6,
             schlick: false,
+            soft_light_size: None,
+            light_grid: DEFAULT_LIGHT_GRID,
+            roughness: 0.0,
         }
     }
 }
@@ -40,12 +58,89 @@ pub struct LightSample {
     pub colour: Vec3,
 }
 
-/// The point samples of every light of a scene: one per point light, a grid per area light.
-pub fn light_samples(lights: &[Light]) -> Vec<LightSample> {
-    let mut samples = Vec::new();
+/// A light as the shader samples it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Emitter {
+    /// The same point for every sample.
+    Point(LightSample),
+    /// Sample `(p, q)` of a pixel with k x k samples takes one point of the rectangle,
+    /// jittered in cell `(p, q)` of a k x k grid over it, with the full colour.
+    Rectangle(Rectangle),
+}
+
+/// A rectangular light centred at `centre`, with sides the full-length vectors `across`
+/// and `up`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rectangle {
+    pub centre: Vec3,
+    pub across: Vec3,
+    pub up: Vec3,
+    pub colour: Vec3,
+}
+
+impl Rectangle {
+    /// The point at `(s, t)` in `[-0.5, 0.5]^2`.
+    fn at(&self, s: f32, t: f32) -> Vec3 {
+        self.centre + self.across * s + self.up * t
+    }
+
+    /// The centres of its n x n cells, each with 1 / n^2 of the colour.
+    fn grid(self, n: u32) -> impl Iterator<Item = LightSample> {
+        let n = n.max(1);
+        let cell = move |i: u32| (i as f32 + 0.5) / n as f32 - 0.5;
+        (0..n * n).map(move |i| LightSample {
+            position: self.at(cell(i / n), cell(i % n)),
+            colour: self.colour / (n * n) as f32,
+        })
+    }
+}
+
+impl Emitter {
+    /// The point of this light (the `index`-th of the shader's) that `sample` sees.
+    pub fn point(&self, index: usize, sample: &Sample) -> LightSample {
+        match self {
+            Emitter::Point(light) => *light,
+            Emitter::Rectangle(rectangle) => {
+                let dim = dim::LIGHT + 2 * index as u32;
+                let k = sample.cells as f32;
+                let s = (sample.cell[0] as f32 + sample.rng.uniform(dim)) / k - 0.5;
+                let t = (sample.cell[1] as f32 + sample.rng.uniform(dim + 1)) / k - 0.5;
+                LightSample {
+                    position: rectangle.at(s, t),
+                    colour: rectangle.colour,
+                }
+            }
+        }
+    }
+}
+
+/// The lights of a scene as the shader samples them. Lights with an area are the
+/// scene's `al` lights and, with soft shadows, its point lights as squares of side
+/// `soft_light_size` in the plane perpendicular to `camera_up`. With `jittered`
+/// sampling they stay rectangles, sampled once per sample; otherwise each becomes an
+/// n x n grid of points (n = `light_grid`), each with 1 / n^2 of the colour.
+pub fn emitters(
+    lights: &[Light],
+    camera_up: Vec3,
+    options: &ShadeOptions,
+    jittered: bool,
+) -> Vec<Emitter> {
+    let mut emitters = Vec::new();
     for light in lights {
-        match *light {
-            Light::Point { position, colour } => samples.push(LightSample { position, colour }),
+        let rectangle = match *light {
+            Light::Point { position, colour } => {
+                let Some(size) = options.soft_light_size else {
+                    emitters.push(Emitter::Point(LightSample { position, colour }));
+                    continue;
+                };
+                let (across, up) = square_axes(camera_up);
+                Rectangle {
+                    centre: position,
+                    across: across * size,
+                    up: up * size,
+                    colour,
+                }
+            }
             Light::Area {
                 centre,
                 target,
@@ -54,22 +149,33 @@ pub fn light_samples(lights: &[Light]) -> Vec<LightSample> {
                 colour,
             } => {
                 let (across, up) = area_light_axes(target - centre);
-                let n = AREA_LIGHT_GRID;
-                let share = colour / (n * n) as f32;
-                for i in 0..n {
-                    for j in 0..n {
-                        let s = (i as f32 + 0.5) / n as f32 - 0.5;
-                        let t = (j as f32 + 0.5) / n as f32 - 0.5;
-                        samples.push(LightSample {
-                            position: centre + across * (s * width) + up * (t * height),
-                            colour: share,
-                        });
-                    }
+                Rectangle {
+                    centre,
+                    across: across * width,
+                    up: up * height,
+                    colour,
                 }
             }
+        };
+        if jittered {
+            emitters.push(Emitter::Rectangle(rectangle));
+        } else {
+            emitters.extend(rectangle.grid(options.light_grid).map(Emitter::Point));
         }
     }
-    samples
+    emitters
+}
+
+/// Two unit axes spanning the plane perpendicular to `camera_up`.
+fn square_axes(camera_up: Vec3) -> (Vec3, Vec3) {
+    let normal = camera_up.normalize();
+    let helper = if normal.x.abs() < 0.9 {
+        Vec3::X
+    } else {
+        Vec3::Z
+    };
+    let across = normal.cross(helper).normalize();
+    (across, normal.cross(across))
 }
 
 /// Two unit axes spanning the plane of an area light facing `facing`: the width runs
@@ -86,43 +192,75 @@ fn area_light_axes(facing: Vec3) -> (Vec3, Vec3) {
     (across, normal.cross(across))
 }
 
+/// The random state of one primary sample and of the rays it spawns.
+#[derive(Clone, Copy, Debug)]
+pub struct Sample {
+    /// This ray's random numbers.
+    pub rng: SampleRng,
+    /// The sample's cell `(p, q)` in the pixel's k x k grid, and k.
+    pub cell: [u32; 2],
+    pub cells: u32,
+}
+
+impl Sample {
+    /// The sample of the ray spawned along `branch` (0 reflected, 1 transmitted).
+    fn spawn(&self, branch: u32) -> Sample {
+        Sample {
+            rng: self.rng.spawn(branch),
+            ..*self
+        }
+    }
+}
+
 /// Everything a trace needs that stays fixed during a render.
 pub struct Shader<'a> {
     pub scene: &'a Scene,
     pub tracer: &'a Tracer<'a>,
     pub skybox: Option<&'a Skybox>,
-    pub lights: Vec<LightSample>,
+    pub lights: Vec<Emitter>,
     /// `1 / (1.25 * number of lights in the file)`, the weight of the specular highlight.
     pub katt: f32,
     pub options: ShadeOptions,
 }
 
 impl<'a> Shader<'a> {
+    /// A shader for `scene`; `jittered` says whether pixels are sampled on a jittered
+    /// grid, which decides how lights with an area are sampled.
     pub fn new(
         scene: &'a Scene,
         tracer: &'a Tracer<'a>,
         skybox: Option<&'a Skybox>,
         options: ShadeOptions,
+        jittered: bool,
     ) -> Self {
         let light_count = scene.lights.len().max(1) as f32;
         Shader {
             scene,
             tracer,
             skybox,
-            lights: light_samples(&scene.lights),
+            lights: emitters(&scene.lights, scene.camera.up, &options, jittered),
             katt: 1.0 / (1.25 * light_count),
             options,
         }
     }
 
-    /// The colour seen along `ray`, which travels in a medium of index `ior_here`.
-    /// `rays` counts every ray traced, this one included.
-    pub fn trace(&self, ray: &Ray, depth: u32, ior_here: f32, rays: &mut u64) -> Vec3 {
+    /// The colour seen along `ray`, which travels in a medium of index `ior_here` and
+    /// draws its random numbers from `sample`. `rays` counts every ray traced, this one
+    /// included.
+    pub fn trace(
+        &self,
+        ray: &Ray,
+        sample: &Sample,
+        depth: u32,
+        ior_here: f32,
+        rays: &mut u64,
+    ) -> Vec3 {
         *rays += 1;
         let hit = self.tracer.closest(ray, 0.0, f32::INFINITY);
         let hit = hit.map(|h| (h, self.surface(ray, &h)));
         self.shade(
             ray,
+            sample,
             hit,
             depth,
             ior_here,
@@ -144,6 +282,7 @@ impl<'a> Shader<'a> {
     pub fn trace_packet(
         &self,
         packet: &[Ray; 8],
+        samples: &[Sample; 8],
         active: u8,
         visible: &mut [u8],
         rays: &mut u64,
@@ -154,7 +293,7 @@ impl<'a> Shader<'a> {
         // says whether lane k sees it.
         let surfaces: [Option<Surface>; 8] =
             std::array::from_fn(|k| hits[k].map(|hit| self.surface(&packet[k], &hit)));
-        for (light, visible) in self.lights.iter().zip(visible.iter_mut()) {
+        for (index, (light, visible)) in self.lights.iter().zip(visible.iter_mut()).enumerate() {
             let mut shadows = [Ray::new(Vec3::ZERO, Vec3::Z); 8];
             let mut distances = [0.0; 8];
             let mut lanes = 0u8;
@@ -162,8 +301,9 @@ impl<'a> Shader<'a> {
                 let Some(surface) = surfaces[k] else {
                     continue;
                 };
+                let point = light.point(index, &samples[k]);
                 if let Some((ray, distance)) =
-                    shadow_ray(surface.p, surface.nf, light, packet[k].time)
+                    shadow_ray(surface.p, surface.nf, &point, packet[k].time)
                 {
                     (shadows[k], distances[k]) = (ray, distance);
                     lanes |= 1 << k;
@@ -177,18 +317,26 @@ impl<'a> Shader<'a> {
                 return Vec3::ZERO;
             }
             let hit = hits[k].zip(surfaces[k]);
-            self.shade(&packet[k], hit, 1, 1.0, rays, &mut |_, _, light| {
-                visible[light] & (1 << k) == 0
-            })
+            self.shade(
+                &packet[k],
+                &samples[k],
+                hit,
+                1,
+                1.0,
+                rays,
+                &mut |_, _, light| visible[light] & (1 << k) == 0,
+            )
         })
     }
 
     /// The colour at `hit` and its surface (or the background when there is none) seen
     /// along `ray`. `occluded(shadow_ray, distance, light_index)` answers the shadow
     /// queries of this hit; deeper rays are traced one by one.
+    #[allow(clippy::too_many_arguments)] // the ray's state, and how to answer its shadows
     fn shade(
         &self,
         ray: &Ray,
+        sample: &Sample,
         hit: Option<(Hit, Surface)>,
         depth: u32,
         ior_here: f32,
@@ -200,14 +348,19 @@ impl<'a> Shader<'a> {
         };
         let material = &self.scene.materials[self.tracer.geometry.material(hit.prim) as usize];
 
-        let mut colour = self.local(ray, p, nf, material, rays, occluded);
+        let mut colour = self.local(ray, sample, p, nf, material, rays, occluded);
         if depth >= self.options.max_depth {
             return colour.clamp(Vec3::ZERO, Vec3::ONE);
         }
-        let reflect_ray = || Ray {
-            origin: p + EPS * nf,
-            dir: (ray.dir - 2.0 * ray.dir.dot(nf) * nf).normalize(),
-            time: ray.time,
+        let (reflected, transmitted) = (sample.spawn(0), sample.spawn(1));
+        let mut reflect = || {
+            let mirror = (ray.dir - 2.0 * ray.dir.dot(nf) * nf).normalize();
+            let ray = Ray {
+                origin: p + EPS * nf,
+                dir: self.fuzz(mirror, nf, &reflected.rng),
+                time: ray.time,
+            };
+            self.trace(&ray, &reflected, depth + 1, ior_here, rays)
         };
         if material.transmittance > 0.0 {
             let ior_next = if inside { 1.0 } else { material.ior };
@@ -216,7 +369,7 @@ impl<'a> Shader<'a> {
             let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
             if sin2_t > 1.0 {
                 // Total internal reflection: Kr = 1 and no transmitted ray.
-                colour += material.specular * self.trace(&reflect_ray(), depth + 1, ior_here, rays);
+                colour += material.specular * reflect();
             } else {
                 let cos_t = (1.0 - sin2_t).sqrt();
                 let kr = if self.options.schlick {
@@ -224,26 +377,22 @@ impl<'a> Shader<'a> {
                 } else {
                     fresnel(ior_here, ior_next, cos_i, cos_t)
                 };
-                let transmitted = Ray {
+                let transmitted_ray = Ray {
                     origin: p - EPS * nf,
                     dir: (eta * ray.dir + (eta * cos_i - cos_t) * nf).normalize(),
                     time: ray.time,
                 };
                 if kr > 0.0 {
-                    colour += kr
-                        * material.specular
-                        * self.trace(&reflect_ray(), depth + 1, ior_here, rays);
+                    colour += kr * material.specular * reflect();
                 }
                 if kr < 1.0 {
                     colour += (1.0 - kr)
                         * material.diffuse
-                        * self.trace(&transmitted, depth + 1, ior_next, rays);
+                        * self.trace(&transmitted_ray, &transmitted, depth + 1, ior_next, rays);
                 }
             }
         } else if material.ks > 0.0 {
-            colour += material.ks
-                * material.specular
-                * self.trace(&reflect_ray(), depth + 1, ior_here, rays);
+            colour += material.ks * material.specular * reflect();
         }
         colour.clamp(Vec3::ZERO, Vec3::ONE)
     }
@@ -260,10 +409,28 @@ impl<'a> Shader<'a> {
         Surface { p, nf, inside }
     }
 
+    /// A reflected direction: the `mirror` direction, or with roughness g > 0 the
+    /// direction of `mirror + g q` for `q` uniform in the unit ball, unless that one
+    /// points below the surface of normal `nf` (P3F.md 6.4).
+    fn fuzz(&self, mirror: Vec3, nf: Vec3, rng: &SampleRng) -> Vec3 {
+        let g = self.options.roughness;
+        if g == 0.0 {
+            return mirror;
+        }
+        let dir = (mirror + g * rng.unit_ball(dim::FUZZ)).normalize();
+        if dir.dot(nf) > 0.0 {
+            dir
+        } else {
+            mirror
+        }
+    }
+
     /// Blinn-Phong over the lights that face the surface and are not shadowed.
+    #[allow(clippy::too_many_arguments)] // the ray's state, the surface, its shadows
     fn local(
         &self,
         ray: &Ray,
+        sample: &Sample,
         p: Vec3,
         nf: Vec3,
         m: &Material,
@@ -272,7 +439,8 @@ impl<'a> Shader<'a> {
     ) -> Vec3 {
         let mut colour = Vec3::ZERO;
         for (index, light) in self.lights.iter().enumerate() {
-            let Some((shadow, distance)) = shadow_ray(p, nf, light, ray.time) else {
+            let light = light.point(index, sample);
+            let Some((shadow, distance)) = shadow_ray(p, nf, &light, ray.time) else {
                 continue;
             };
             *rays += 1;
@@ -374,11 +542,17 @@ mod tests {
         let tracer = Tracer::new(&scene.geometry, crate::accel::Accel::None);
         let options = ShadeOptions {
             max_depth: 2,
-            schlick: false,
+            ..ShadeOptions::default()
         };
-        let shader = Shader::new(&scene, &tracer, None, options);
+        let shader = Shader::new(&scene, &tracer, None, options, false);
         let mut rays = 0;
-        let colour = shader.trace(&Ray::new(origin, dir), 1, 1.5, &mut rays);
+        let colour = shader.trace(
+            &Ray::new(origin, dir),
+            &sample([0, 0], 1, 0),
+            1,
+            1.5,
+            &mut rays,
+        );
         (colour, rays)
     }
 
@@ -404,19 +578,124 @@ mod tests {
 
     #[test]
     fn area_light_grid_covers_the_rectangle_with_the_full_colour() {
-        let samples = light_samples(&[Light::Area {
+        let light = Light::Area {
             centre: Vec3::new(0., 5., 0.),
             target: Vec3::ZERO,
             width: 2.0,
             height: 1.0,
             colour: Vec3::ONE,
-        }]);
-        assert_eq!(samples.len(), (AREA_LIGHT_GRID * AREA_LIGHT_GRID) as usize);
-        let total: Vec3 = samples.iter().map(|s| s.colour).sum();
+        };
+        let options = ShadeOptions::default();
+        let samples = emitters(&[light], Vec3::Z, &options, false);
+        assert_eq!(
+            samples.len(),
+            (DEFAULT_LIGHT_GRID * DEFAULT_LIGHT_GRID) as usize
+        );
+        let points = samples.iter().map(|e| match e {
+            Emitter::Point(s) => *s,
+            Emitter::Rectangle(_) => panic!("without antialiasing lights are points"),
+        });
+        let total: Vec3 = points.clone().map(|s| s.colour).sum();
         assert!((total - Vec3::ONE).length() < 1e-6);
-        for s in &samples {
+        for s in points {
             assert!((s.position.y - 5.0).abs() < 1e-6);
             assert!(s.position.x.abs() < 1.0 && s.position.z.abs() < 0.5);
         }
+    }
+
+    fn sample(cell: [u32; 2], cells: u32, index: u32) -> Sample {
+        Sample {
+            rng: SampleRng::new(index, 0, 7),
+            cell,
+            cells,
+        }
+    }
+
+    #[test]
+    fn soft_point_lights_become_squares_perpendicular_to_the_camera_up() {
+        let light = Light::Point {
+            position: Vec3::new(1.0, 2.0, 3.0),
+            colour: Vec3::ONE,
+        };
+        let options = ShadeOptions {
+            soft_light_size: Some(0.5),
+            light_grid: 3,
+            ..ShadeOptions::default()
+        };
+        let up = Vec3::new(0.0, 1.0, 1.0);
+        // Without antialiasing: a 3 x 3 grid in the plane through the light.
+        let grid = emitters(&[light], up, &options, false);
+        assert_eq!(grid.len(), 9);
+        let mut total = Vec3::ZERO;
+        for emitter in &grid {
+            let point = emitter.point(0, &sample([0, 0], 1, 0));
+            let offset = point.position - Vec3::new(1.0, 2.0, 3.0);
+            assert!(offset.dot(up).abs() < 1e-6, "{offset} leaves the plane");
+            assert!(offset.length() <= 0.5 * 2f32.sqrt() / 2.0 * 1.001);
+            total += point.colour;
+        }
+        assert!((total - Vec3::ONE).length() < 1e-6);
+
+        // With 4 x 4 antialiasing: sample (p, q) takes a point of cell (p, q), with the
+        // light's full colour, and fills that cell.
+        let [square] = emitters(&[light], up, &options, true)[..] else {
+            panic!("one rectangle per light")
+        };
+        let Emitter::Rectangle(r) = square else {
+            panic!("a soft light is a rectangle")
+        };
+        let coordinates = |position: Vec3| {
+            let offset = position - r.centre;
+            let s = offset.dot(r.across) / r.across.length_squared() + 0.5;
+            let t = offset.dot(r.up) / r.up.length_squared() + 0.5;
+            (s * 4.0, t * 4.0)
+        };
+        let (mut low, mut high) = ((f32::MAX, f32::MAX), (f32::MIN, f32::MIN));
+        for i in 0..2000 {
+            let point = square.point(0, &sample([1, 2], 4, i));
+            assert_eq!(point.colour, Vec3::ONE);
+            let (s, t) = coordinates(point.position);
+            assert!(
+                (1.0..2.0).contains(&s) && (2.0..3.0).contains(&t),
+                "{s} {t}"
+            );
+            (low, high) = ((low.0.min(s), low.1.min(t)), (high.0.max(s), high.1.max(t)));
+        }
+        assert!(low.0 < 1.01 && low.1 < 2.01 && high.0 > 1.99 && high.1 > 2.99);
+    }
+
+    /// A shader over an empty scene, for the direction helpers.
+    fn with_shader(roughness: f32, check: impl FnOnce(&Shader)) {
+        let scene = crate::scene::p3f::parse_text("bclr 0 0 0").unwrap();
+        let tracer = Tracer::new(&scene.geometry, crate::accel::Accel::None);
+        let options = ShadeOptions {
+            roughness,
+            ..ShadeOptions::default()
+        };
+        check(&Shader::new(&scene, &tracer, None, options, false));
+    }
+
+    #[test]
+    fn fuzzy_reflections_spread_with_roughness_and_stay_above_the_surface() {
+        let nf = Vec3::Y;
+        let mirror = Vec3::new(1.0, 0.2, 0.0).normalize();
+        let mean_angle = |g: f32| {
+            let mut sum = 0.0;
+            with_shader(g, |shader| {
+                for i in 0..4000 {
+                    let dir = shader.fuzz(mirror, nf, &SampleRng::new(i, 0, 3));
+                    assert!(dir.dot(nf) > 0.0);
+                    assert!((dir.length() - 1.0).abs() < 1e-5);
+                    sum += dir.dot(mirror).clamp(-1.0, 1.0).acos();
+                }
+            });
+            sum / 4000.0
+        };
+        assert_eq!(mean_angle(0.0), 0.0);
+        let (small, large) = (mean_angle(0.1), mean_angle(0.4));
+        // For g << 1 the mean angle is about g times the mean radius of the ball's
+        // projection, 3 pi / 16 ~ 0.59.
+        assert!((0.04..0.08).contains(&small), "g 0.1: {small}");
+        assert!(large > 3.0 * small, "g 0.4: {large}, g 0.1: {small}");
     }
 }
