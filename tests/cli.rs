@@ -25,6 +25,13 @@ fn help_explains_every_flag() {
         "--threads",
         "--seed",
         "--quiet",
+        "--aperture",
+        "--focal",
+        "--soft-shadows",
+        "--light-size",
+        "--light-samples",
+        "--roughness",
+        "--shutter",
     ] {
         assert!(help.contains(flag), "render --help does not mention {flag}");
     }
@@ -334,4 +341,48 @@ fn accel_choice_notes_and_statistics() {
     }
     let bad = p3trace(&["info", scene, "--grid-density", "0"]);
     assert_eq!(bad.status.code(), Some(2));
+}
+
+#[test]
+fn renders_the_random_scene_and_checks_effect_flags() {
+    let dir = scratch("cli_effects");
+    let out = dir.join("random.png");
+    let run = p3trace(&[
+        "render",
+        "random",
+        "--seed",
+        "3",
+        "--resolution",
+        "40x30",
+        "--roughness",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(
+        stdout(&run).starts_with("random: 40x30"),
+        "{}",
+        stdout(&run)
+    );
+    assert!(out.is_file());
+
+    let scene = showcase();
+    for (flags, message) in [
+        (&["--light-size", "1"][..], "--soft-shadows"),
+        (&["--shutter", "0.3,0"], "closes"),
+        (&["--shutter", "0"], "T0,T1"),
+        (&["--roughness", "2"], "roughness"),
+        (&["--focal", "0"], "focal"),
+        (&["--aperture=-1"], "aperture"),
+    ] {
+        let mut args = vec!["render", &scene, "-o", out.to_str().unwrap()];
+        args.extend(flags);
+        let run = p3trace(&args);
+        assert_eq!(run.status.code(), Some(2), "{flags:?}");
+        assert!(
+            stderr(&run).contains(message),
+            "{flags:?}: {}",
+            stderr(&run)
+        );
+    }
 }
