@@ -3,22 +3,13 @@
 
 mod common;
 
+use common::render_scene;
 use glam::{Vec2, Vec3};
 use p3trace::accel::AccelKind;
 use p3trace::render::film::Film;
-use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
+use p3trace::render::{RenderMode, RenderOptions, Sampling};
 use p3trace::scene::p3f::parse_text;
-use p3trace::scene::{parse_file, Scene};
-
-/// A scene from P3F text, rendered without skybox with the BVH and whatever `configure`
-/// sets on top of the file's settings.
-fn render_scene(scene: &Scene, configure: impl FnOnce(&mut RenderOptions)) -> Film {
-    let mut options = RenderOptions::from_scene(scene);
-    options.skybox = false;
-    options.accel.kind = AccelKind::Bvh;
-    configure(&mut options);
-    render(scene, &options).expect("the render runs").film
-}
+use p3trace::scene::parse_file;
 
 /// The grey level of pixel `(x, y)`, `y` counted from the bottom row as the camera does.
 fn grey(film: &Film, x: u32, y: u32) -> f32 {

@@ -5,23 +5,13 @@ mod common;
 
 use std::path::Path;
 
+use common::render_scene;
 use glam::Vec3;
-use p3trace::accel::AccelKind;
 use p3trace::compare;
 use p3trace::render::film::{to_byte, Film};
 use p3trace::render::shade::EPS;
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::{parse_file, Scene};
-
-fn render_scene(scene: &Scene, configure: impl FnOnce(&mut RenderOptions)) -> Film {
-    let mut options = RenderOptions::from_scene(scene);
-    options.skybox = false;
-    // The course files say `accel 0`; every structure gives the same image
-    // (tests/accel.rs), and the BVH gives it in a fraction of the time.
-    options.accel.kind = AccelKind::Bvh;
-    configure(&mut options);
-    render(scene, &options).expect("the render runs").film
-}
 
 /// Packets change how rays travel, never what they find: every scene of `scenes/` (every
 /// primitive kind, the thin lens, moving spheres, glass) and the course scenes, with an

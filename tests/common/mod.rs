@@ -4,6 +4,11 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+use p3trace::accel::AccelKind;
+use p3trace::render::film::Film;
+use p3trace::render::{render, RenderOptions};
+use p3trace::scene::Scene;
+
 /// The course material beside the project (`../shared`), or `P3TRACE_SHARED` when set.
 /// Tests that need it print why they skip when it is absent.
 pub fn shared() -> Option<PathBuf> {
@@ -47,4 +52,15 @@ pub fn scratch(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("scratch folder");
     dir
+}
+
+/// Renders `scene` without its skybox, with the settings of its file changed by
+/// `configure`. The course files say `accel 0`; every structure gives the same image
+/// (tests/accel.rs), and the BVH gives it in a fraction of the time.
+pub fn render_scene(scene: &Scene, configure: impl FnOnce(&mut RenderOptions)) -> Film {
+    let mut options = RenderOptions::from_scene(scene);
+    options.skybox = false;
+    options.accel.kind = AccelKind::Bvh;
+    configure(&mut options);
+    render(scene, &options).expect("the render runs").film
 }
