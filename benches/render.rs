@@ -41,6 +41,7 @@ fn effects(c: &mut Criterion) {
         ("16spp", |_, _| {}),
         ("soft_shadows", |_, o| o.shade.soft_light_size = Some(0.5)),
         ("fuzzy", |_, o| o.shade.roughness = 0.2),
+        // balls_low has no moving spheres: this times the shutter's draws alone.
         ("motion_blur", |_, o| o.shutter = [0.0, 0.3]),
         ("depth_of_field", |scene, _| scene.camera.aperture = 8.0),
     ];
