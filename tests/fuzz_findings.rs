@@ -1,6 +1,7 @@
 //! Every input the fuzzers (`fuzz/`) found wrong, kept as a test once fixed, with what
 //! was wrong and where it was fixed.
 
+use p3trace::accel::AccelKind;
 use p3trace::scene::p3f::parse_text;
 
 fn error_of(text: &str) -> String {
@@ -82,5 +83,55 @@ fn ray_along_a_box_face_hits_nothing_beside_it() {
             0,
             "{name}"
         );
+    }
+}
+
+/// accel_agreement, crash-5459e968fd71: two copies of a plane 1e9 away, a sphere with
+/// the lights inside it. The grid (scalar and packet mode alike) lights a pixel of the
+/// far plane that brute force and the BVH shadow. With `max_depth` 1 it still differs, so
+/// it is a shadow ray: it starts on the plane some 1e9 away from a grid 5 units wide,
+/// where `f32` cannot place a ray within a cell; presumably the grid's slab test or walk
+/// rounds one way and the sphere's own test the other. NOT FIXED: a PBRT-style
+/// conservative exit (`t_far * (1 + 2 gamma_3)`) in the grid's box test was tried and is
+/// not enough. Run it with `--ignored`.
+#[test]
+#[ignore = "open fuzz finding: the grid disagrees with brute force for rays from 1e9 away"]
+fn far_planes_and_lights_inside_a_sphere_render_alike_everywhere() {
+    use glam::Vec3;
+    use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
+    let plane = "pl -1e9 -1e9 -1e9 -1e9 -1e9 1e9 3.5 1e9 -1e9\n";
+    let text = format!(
+        "{plane}{plane}s 2.5 2.5 2.5 2.5\nl 2.5 2.5 2.5 2.5 2.5 2.5\n\
+         l 2.5 2.5 2.5 2.5 2.5 2.5\nl 2.5 2.5 2.5 2.5 0 0\n"
+    );
+    let mut scene = parse_text(&text).unwrap();
+    scene.camera.from = Vec3::ZERO;
+    scene.camera.at = Vec3::new(0.0, 0.0, -1e9);
+    scene.camera.up = Vec3::splat(-1e9);
+    scene.camera.angle = 78.0;
+    let mut options = RenderOptions::from_scene(&scene);
+    (options.width, options.height) = (8, 6);
+    options.threads = Some(1);
+    options.shade.max_depth = 3;
+    options.sampling = Sampling::Jittered(2);
+    let mut images = Vec::new();
+    for (kind, mode) in [
+        (AccelKind::None, RenderMode::Scalar),
+        (AccelKind::Grid, RenderMode::Scalar),
+        (AccelKind::Grid, RenderMode::Packet),
+        (AccelKind::Bvh, RenderMode::Packet),
+    ] {
+        options.accel.kind = kind;
+        options.mode = mode;
+        images.push(((kind, mode), render(&scene, &options).unwrap().film.pixels));
+    }
+    for (name, pixels) in &images[1..] {
+        for (k, (a, b)) in pixels.iter().zip(&images[0].1).enumerate() {
+            assert_eq!(
+                a.to_array().map(f32::to_bits),
+                b.to_array().map(f32::to_bits),
+                "{name:?} pixel {k}: {a} against {b}"
+            );
+        }
     }
 }

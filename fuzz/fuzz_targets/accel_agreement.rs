@@ -288,7 +288,14 @@ fuzz_target!(|input: Input| {
             .collect();
         match &reference {
             None => reference = Some(bits),
-            Some(expected) => assert!(&bits == expected, "{kind:?} {mode:?} differs"),
+            Some(expected) => {
+                let first = (0..bits.len()).find(|&k| bits[k] != expected[k]);
+                assert!(
+                    first.is_none(),
+                    "{kind:?} {mode:?} differs at channel {first:?} of {:?}\n{text}",
+                    scene.camera
+                )
+            }
         }
     }
 });
