@@ -1,5 +1,5 @@
 //! The `p3trace` command: parses the command line, calls the library, and maps failures
-//! to exit codes (1 a render or I/O failure, 2 bad usage or a bad scene).
+//! to exit codes (1 a render or I/O failure, 2 bad usage or a bad scene, 130 Ctrl-C).
 
 mod cli;
 
@@ -29,7 +29,18 @@ enum Failure {
     Run(String),
 }
 
+/// The exit status after Ctrl-C: 128 + SIGINT, as a shell reports a process it stopped.
+const INTERRUPTED: i32 = 130;
+
 fn main() -> ExitCode {
+    // On Ctrl-C, remove the file being written, if any, and leave. Should the handler fail
+    // to install, Ctrl-C keeps its default action: the target is still never truncated,
+    // but a `.partial` file may stay.
+    let _ = ctrlc::set_handler(|| {
+        let _held_until_exit = p3trace::output::abandon_partial_files();
+        eprintln!("p3trace: interrupted");
+        std::process::exit(INTERRUPTED);
+    });
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => run_render(&args),

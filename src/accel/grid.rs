@@ -519,10 +519,28 @@ fn slab(b: &Aabb, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<(f
     for k in 0..3 {
         let t1 = (b.min[k] - ray.origin[k]) * inv_dir[k];
         let t2 = (b.max[k] - ray.origin[k]) * inv_dir[k];
-        near = near.max(t1.min(t2));
-        far = far.min(t1.max(t2));
+        // Each distance is off by up to `GAMMA_3` of itself; widened by twice that, the
+        // interval holds the true one, or a ray from far away could miss a box that the
+        // objects' own tests find it in (fuzz finding: a shadow ray 1e9 from the grid).
+        near = near.max(widened(t1.min(t2), -1.0));
+        far = far.min(widened(t1.max(t2), 1.0));
     }
     (near <= far).then_some((near, far))
+}
+
+/// The relative error bound of three rounded operations, `3 u / (1 - 3 u)` with `u` the
+/// unit roundoff (PBRT's `gamma(3)`).
+const GAMMA_3: f32 = 3.0 * (f32::EPSILON / 2.0) / (1.0 - 3.0 * (f32::EPSILON / 2.0));
+
+/// `t` moved by `2 GAMMA_3` of itself towards `direction` (-1 or 1), by a product so
+/// that infinities stay what they are.
+fn widened(t: f32, direction: f32) -> f32 {
+    let grow = if (t > 0.0) == (direction > 0.0) {
+        1.0
+    } else {
+        -1.0
+    };
+    t * (1.0 + grow * 2.0 * GAMMA_3)
 }
 
 thread_local! {

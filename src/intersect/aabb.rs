@@ -13,12 +13,26 @@ use crate::simd::{F32x8, Mask8, Vec3x8};
 pub fn aabb(ray: &Ray, inv_dir: Vec3, min: Vec3, max: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
     let t1 = (min - ray.origin) * inv_dir;
     let t2 = (max - ray.origin) * inv_dir;
-    let near = t1.min(t2).max_element();
-    let far = t1.max(t2).min_element();
+    let near = largest(t1.min(t2));
+    let far = smallest(t1.max(t2));
     if !(near <= far) {
         return None;
     }
     first_root_in(near, far, t_min, t_max)
+}
+
+/// `max(x, max(y, z))` by the `a > b ? a : b` rule, as the SIMD twins take it. Not glam's
+/// `max_element`: glam 0.34.3 changed its order to `max(max(x, y), z)`, which lets the
+/// NaN slab of a ray lying in a `y` face hide the `x` slab, so the box was hit outside.
+fn largest(t: Vec3) -> f32 {
+    let max = |a: f32, b: f32| if a > b { a } else { b };
+    max(t.x, max(t.y, t.z))
+}
+
+/// `min(x, min(y, z))` by the `a < b ? a : b` rule; see [`largest`].
+fn smallest(t: Vec3) -> f32 {
+    let min = |a: f32, b: f32| if a < b { a } else { b };
+    min(t.x, min(t.y, t.z))
 }
 
 /// Eight boxes side by side: the primitive boxes of a leaf for [`aabb_leaf`], or the
@@ -110,7 +124,7 @@ pub fn aabb_leaf(
 }
 
 /// The body of [`aabb`], lane by lane, with glam's `min`/`max` rule ([`F32x8::min`]) and
-/// its `max_element` order `max(x, max(y, z))`.
+/// the order of [`largest`] and [`smallest`].
 #[inline(always)]
 fn aabb_lanes(
     origin: Vec3x8,
@@ -300,6 +314,26 @@ mod tests {
         // Origin on the plane y = 1 with dir.y = 0: 0 * inf is NaN in that slab.
         let t = test(Vec3::new(0., 1., -5.), Vec3::Z, 0.0, f32::INFINITY);
         assert!(t.is_none() || t == Some(4.0));
+    }
+
+    #[test]
+    fn a_ray_in_a_face_plane_never_hits_beside_the_box() {
+        // The face's slab is NaN (0 * inf); the other two must still count, whichever
+        // axis the NaN is on (fuzz finding: with glam 0.34.3's `min_element` a NaN `y`
+        // slab hid the `x` one).
+        for face in 0..3 {
+            for away in (0..3).filter(|&k| k != face) {
+                let across = 3 - face - away;
+                let (mut o, mut d) = (Vec3::ZERO, Vec3::ZERO);
+                (o[face], o[away]) = (1.0, 2.0);
+                (d[away], d[across]) = (1.0, 1.0);
+                assert_eq!(
+                    test(o, d, 0.0, f32::INFINITY),
+                    None,
+                    "on face {face}, leaving along {away}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -30,6 +30,20 @@ pub const TILE: u32 = 16;
 /// Largest image rendered, in pixels (6 GiB of film and tile memory).
 pub const MAX_PIXELS: u64 = 1 << 28;
 
+/// Refuses a `width` x `height` image too large to hold in memory, saying how much it
+/// would need.
+pub fn check_image_size(width: u32, height: u32) -> Result<(), String> {
+    let pixels = width as u64 * height as u64;
+    if pixels <= MAX_PIXELS {
+        return Ok(());
+    }
+    // The film and the tiles' copies hold 24 bytes a pixel.
+    Err(format!(
+        "a {width}x{height} image needs {:.1} GiB; the limit is {MAX_PIXELS} pixels",
+        (pixels * 24) as f64 / (1u64 << 30) as f64
+    ))
+}
+
 /// Where the samples of a pixel go.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Sampling {
@@ -131,17 +145,7 @@ impl RenderOptions {
 
     /// Refuses images too large to hold in memory, saying how much they would need.
     pub fn check_size(&self) -> Result<(), String> {
-        let pixels = self.width as u64 * self.height as u64;
-        if pixels <= MAX_PIXELS {
-            return Ok(());
-        }
-        // The film and the tiles' copies hold 24 bytes a pixel.
-        Err(format!(
-            "a {}x{} image needs {:.1} GiB; the limit is {MAX_PIXELS} pixels",
-            self.width,
-            self.height,
-            (pixels * 24) as f64 / (1u64 << 30) as f64
-        ))
+        check_image_size(self.width, self.height)
     }
 }
 

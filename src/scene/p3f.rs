@@ -14,6 +14,13 @@ use super::{AccelKind, CameraSpec, Light, Material, Scene, Warning};
 pub const MAX_SPP_SIDE: u32 = 1024;
 /// Largest image side accepted from a file or the command line.
 pub const MAX_RESOLUTION: u32 = 1 << 16;
+/// Largest magnitude of a number in a scene. The intersection routines multiply up to four
+/// coordinates together (1e36 at most here, within `f32`); beyond it they overflow, and
+/// the structures' boxes with them.
+pub const MAX_MAGNITUDE: f32 = 1e9;
+/// Least time between a moving sphere's two positions, unless they are at the same time:
+/// with `MAX_MAGNITUDE` it keeps the sphere's centre finite at any time a scene can name.
+pub const MIN_TIME_SPAN: f32 = 1.0 / MAX_MAGNITUDE;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParseError {
@@ -47,17 +54,23 @@ pub fn parse_file(path: &Path) -> Result<Scene> {
         directive: None,
         message: format!("cannot read the file: {e}"),
     })?;
-    let text = std::str::from_utf8(&bytes).map_err(|e| {
-        let (line, column) = position_of(&bytes, e.valid_up_to());
+    parse_bytes(&bytes, &name, path.parent().unwrap_or(Path::new("")))
+}
+
+/// Parses the bytes of a P3F file, which must be UTF-8 text; `name` and `base_dir` as
+/// for [`parse_str`].
+pub fn parse_bytes(bytes: &[u8], name: &str, base_dir: &Path) -> Result<Scene> {
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        let (line, column) = position_of(bytes, e.valid_up_to());
         ParseError {
-            file: name.clone(),
+            file: name.to_string(),
             line,
             column,
             directive: None,
             message: "the file is not UTF-8 text".into(),
         }
     })?;
-    parse_str(text, &name, path.parent().unwrap_or(Path::new("")))
+    parse_str(text, name, base_dir)
 }
 
 /// Parses P3F text; `name` is used in messages and `base_dir` to resolve `env`.
@@ -233,7 +246,14 @@ impl<'a> Parser<'a> {
     fn number(&mut self, what: &str) -> Result<f32> {
         let token = self.token(what)?;
         match token.text.parse::<f32>() {
-            Ok(x) if x.is_finite() => Ok(x),
+            Ok(x) if x.abs() <= MAX_MAGNITUDE => Ok(x),
+            Ok(x) if x.is_finite() => Err(self.error_token(
+                token,
+                format!(
+                    "{what} must be at most {MAX_MAGNITUDE:e} in magnitude, found '{}'",
+                    token.text
+                ),
+            )),
             Ok(_) => Err(self.error_token(
                 token,
                 format!("{what} must be a finite number, found '{}'", token.text),
@@ -412,6 +432,11 @@ impl<'a> Parser<'a> {
                 let radius = self.radius()?;
                 let t0 = self.number("t0")?;
                 let t1 = self.number("t1")?;
+                if t0 != t1 && !((t1 - t0).abs() >= MIN_TIME_SPAN) {
+                    return Err(self.error_directive(format!(
+                        "t0 and t1 must be equal or at least {MIN_TIME_SPAN:e} apart, found {t0} and {t1}"
+                    )));
+                }
                 let material = self.object_material();
                 let s = &mut self.scene.geometry.moving_spheres;
                 s.centre0.push(c0);
@@ -565,6 +590,9 @@ impl<'a> Parser<'a> {
                 "resolution" => {
                     cam.width = self.resolution("the image width")?;
                     cam.height = self.resolution("the image height")?;
+                    if let Err(message) = crate::render::check_image_size(cam.width, cam.height) {
+                        return Err(self.error_token(key, message));
+                    }
                 }
                 "aperture" => cam.aperture = self.number("the aperture")?,
                 "focal" => cam.focal = self.number("the focal distance")?,

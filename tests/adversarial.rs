@@ -1,0 +1,422 @@
+//! Hostile input and hostile conditions, through the binary: bad scenes are refused with
+//! exit 2 and `file:line:col` before anything is rendered; odd but valid scenes render
+//! what they should; a failed or interrupted write never leaves an image behind.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use common::{p3trace, scratch, stderr, stdout};
+use p3trace::render::film::to_byte;
+
+/// A camera on line 1, looking down -Z at the origin from 5 units away.
+const CAMERA: &str = "v from 0 0 5 at 0 0 0 up 0 1 0 angle 45 resolution 16 12\n";
+const BACKGROUND: [f32; 3] = [0.2, 0.4, 0.6];
+
+fn background_line() -> String {
+    format!(
+        "bclr {} {} {}\n",
+        BACKGROUND[0], BACKGROUND[1], BACKGROUND[2]
+    )
+}
+
+/// The names in `dir`, sorted.
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+fn write_scene(dir: &Path, text: &str) -> PathBuf {
+    let path = dir.join("scene.p3f");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Each bad scene: its text, where the error is (line, column) and what the message says.
+const BAD_SCENES: &[(&str, &str, (u32, u32), &str)] = &[
+    (
+        "nan radius",
+        "s 0 0 0 nan",
+        (2, 9),
+        "must be a finite number",
+    ),
+    (
+        "NaN coordinate",
+        "s 0 NaN 0 1",
+        (2, 5),
+        "must be a finite number",
+    ),
+    (
+        "infinite light",
+        "l 1 inf 2",
+        (2, 5),
+        "must be a finite number",
+    ),
+    (
+        "-inf in a material",
+        "f 1 1 1 1 1 1 1 -inf 10 0 1",
+        (2, 17),
+        "must be a finite number",
+    ),
+    (
+        "overflowing number",
+        "s 1e39 0 0 1",
+        (2, 3),
+        "must be a finite number",
+    ),
+    (
+        "number beyond the limit",
+        "box 0 0 0 2e9 1 1",
+        (2, 11),
+        "at most 1e9 in magnitude",
+    ),
+    (
+        "mesh count beyond the file",
+        "mesh 2000000000 1\n0 0 0",
+        (2, 6),
+        "bytes remain",
+    ),
+    (
+        "polygon count beyond the file",
+        "p 1000000 0 0 0",
+        (2, 3),
+        "bytes remain",
+    ),
+    (
+        "mesh triangles beyond the file",
+        "mesh 3 3\n0 0 0 1 0 0 0 1 0\n1 2 3",
+        (2, 1),
+        "more numbers than the rest of the file holds",
+    ),
+    (
+        "mesh index out of range",
+        "mesh 3 1\n0 0 0 1 0 0 0 1 0\n1 2 4",
+        (4, 5),
+        "vertex index 4 is out of range",
+    ),
+    (
+        "mesh index 0",
+        "mesh 3 1\n0 0 0 1 0 0 0 1 0\n0 1 2",
+        (4, 1),
+        "vertex index 0",
+    ),
+    (
+        "unknown directive",
+        "sphere 0 0 0 1",
+        (2, 1),
+        "unknown directive 'sphere'",
+    ),
+    (
+        "directive cut by the end of the file",
+        "s 0 0 0",
+        (3, 1),
+        "found the end of the file",
+    ),
+    (
+        "directive cut by the next one",
+        "f 1 1 1\ns 0 0 0 1",
+        (3, 1),
+        "expected Kd (a number), found 's'",
+    ),
+    (
+        "negative radius",
+        "s 0 0 0 -1",
+        (2, 1),
+        "the radius must not be negative",
+    ),
+    (
+        "negative moving radius",
+        "ms 0 0 0 1 0 0 -0.5 0 1",
+        (2, 1),
+        "the radius must not be negative",
+    ),
+];
+
+/// Camera blocks that cannot make rays or images, each alone in its file.
+const BAD_CAMERAS: &[(&str, &str, (u32, u32), &str)] = &[
+    (
+        "up parallel to the view",
+        "v from 0 5 0 at 0 0 0 up 0 1 0 angle 45 resolution 16 12",
+        (1, 1),
+        "parallel to the view direction",
+    ),
+    (
+        "from equal to at",
+        "v from 1 1 1 at 1 1 1 up 0 1 0 angle 45 resolution 16 12",
+        (1, 1),
+        "'from' and 'at' are the same point",
+    ),
+    (
+        "resolution 0",
+        "v from 0 0 5 at 0 0 0 up 0 1 0 angle 45 resolution 0 12",
+        (1, 52),
+        "the image width must be between 1 and",
+    ),
+    (
+        "image beyond memory",
+        "v from 0 0 5 at 0 0 0 up 0 1 0 angle 45 resolution 65536 65536",
+        (1, 41),
+        "a 65536x65536 image needs 96.0 GiB",
+    ),
+];
+
+#[test]
+fn bad_scenes_exit_2_at_their_position_and_render_nothing() {
+    let cases = BAD_SCENES
+        .iter()
+        .map(|&(name, bad, at, says)| (name, format!("{CAMERA}{bad}\n"), at, says))
+        .chain(
+            BAD_CAMERAS
+                .iter()
+                .map(|&(name, text, at, says)| (name, format!("{text}\n"), at, says)),
+        );
+    for (name, text, (line, column), says) in cases {
+        let dir = scratch("adversarial_errors");
+        let scene = write_scene(&dir, &text);
+        let image = dir.join("out.png");
+        let out = p3trace(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            image.to_str().unwrap(),
+        ]);
+        let message = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{name}: {message}");
+        let prefix = format!("p3trace: error: {}:{line}:{column}: ", scene.display());
+        assert!(message.starts_with(&prefix), "{name}: {message}");
+        assert!(message.contains(says), "{name}: {message}");
+        assert!(!message.contains("panicked"), "{name}: {message}");
+        assert_eq!(stdout(&out), "", "{name}: results on stdout");
+        assert_eq!(
+            files_in(&dir),
+            ["scene.p3f"],
+            "{name}: something was written"
+        );
+    }
+}
+
+/// Renders `text` with every structure in both modes; all must succeed with the same
+/// image, which is returned with the stderr of the first run.
+fn render_everywhere(name: &str, text: &str) -> (image::RgbImage, String) {
+    let dir = scratch(&format!("adversarial_{name}"));
+    let scene = write_scene(&dir, text);
+    let mut first: Option<(image::RgbImage, String)> = None;
+    for accel in ["none", "grid", "bvh"] {
+        for mode in ["scalar", "packet"] {
+            let image_path = dir.join(format!("{accel}-{mode}.ppm"));
+            let out = p3trace(&[
+                "render",
+                scene.to_str().unwrap(),
+                "--accel",
+                accel,
+                "--mode",
+                mode,
+                "-o",
+                image_path.to_str().unwrap(),
+            ]);
+            let message = stderr(&out);
+            assert!(out.status.success(), "{name} {accel} {mode}: {message}");
+            assert!(!message.contains("panicked"), "{name}: {message}");
+            let image = image::open(&image_path).unwrap().into_rgb8();
+            assert_eq!(image.dimensions(), (16, 12), "{name}");
+            match &first {
+                None => first = Some((image, message)),
+                Some((expected, _)) => {
+                    assert!(&image == expected, "{name}: {accel} {mode} differs")
+                }
+            }
+        }
+    }
+    first.unwrap()
+}
+
+fn background_bytes() -> [u8; 3] {
+    BACKGROUND.map(to_byte)
+}
+
+fn assert_only_background(name: &str, image: &image::RgbImage) {
+    for (x, y, pixel) in image.enumerate_pixels() {
+        assert_eq!(pixel.0, background_bytes(), "{name}: pixel ({x}, {y})");
+    }
+}
+
+#[test]
+fn degenerate_triangles_in_front_of_the_camera_are_never_hit() {
+    let text = format!(
+        "{CAMERA}{}l 0 5 5\nf 1 0 0 1 1 1 1 0.5 10 0 1\n\
+         p 3 -1 -1 0 0 0 0 1 1 0\n\
+         p 3 -1 -1 0 -1 -1 0 1 1 0\n\
+         p 3 0 0 0 0 0 0 0 0 0\n\
+         p 3 0 0 1 1e-30 0 1 0 1e-30 1\n\
+         p 4 -2 -2 0 -1 -1 0 1 1 0 2 2 0\n\
+         pp 3 -1 0 0 0 0 1 0 0 0 0 0 1 1 0 0 0 0 1\n\
+         mesh 3 2 -1 0 0 1 0 0 2 0 0 1 2 3 1 1 2\n",
+        background_line()
+    );
+    let (image, _) = render_everywhere("degenerate", &text);
+    assert_only_background("degenerate triangles", &image);
+}
+
+#[test]
+fn zero_radius_spheres_are_never_hit_and_warned_about() {
+    let text = format!(
+        "{CAMERA}{}l 0 5 5\nf 1 0 0 1 1 1 1 0.5 10 0 1\ns 0 0 0 0\nms 0 0 0 0 0 1 0 0 1\n",
+        background_line()
+    );
+    let (image, message) = render_everywhere("zero_radius", &text);
+    assert_only_background("zero-radius spheres", &image);
+    assert!(
+        message.contains("scene.p3f:5:1: warning: 's': a sphere of radius 0 is never hit"),
+        "{message}"
+    );
+    assert!(
+        message.contains("scene.p3f:6:1: warning: 'ms'"),
+        "{message}"
+    );
+}
+
+#[test]
+fn scenes_without_objects_or_lights_render() {
+    let (image, _) = render_everywhere("empty", &format!("{CAMERA}{}", background_line()));
+    assert_only_background("no objects, no lights", &image);
+    let (image, _) = render_everywhere(
+        "light_no_objects",
+        &format!("{CAMERA}{}l 0 5 5\n", background_line()),
+    );
+    assert_only_background("a light and no objects", &image);
+
+    // A white diffuse sphere with no light: black where it is (no ambient term), the
+    // background around it.
+    let (image, _) = render_everywhere(
+        "no_lights",
+        &format!(
+            "{CAMERA}{}f 1 1 1 1 0 0 0 0 10 0 1\ns 0 0 0 1\n",
+            background_line()
+        ),
+    );
+    assert_eq!(image.get_pixel(8, 6).0, [0, 0, 0]);
+    assert_eq!(image.get_pixel(0, 0).0, background_bytes());
+}
+
+fn showcase() -> String {
+    common::project_file("scenes/showcase.p3f")
+        .display()
+        .to_string()
+}
+
+#[test]
+fn an_unknown_output_extension_is_refused_before_the_scene_is_read() {
+    let dir = scratch("adversarial_extension");
+    let out = p3trace(&[
+        "render",
+        dir.join("missing.p3f").to_str().unwrap(),
+        "-o",
+        dir.join("out.gif").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let message = stderr(&out);
+    assert!(
+        message.contains("cannot tell the image format"),
+        "{message}"
+    );
+    assert!(files_in(&dir).is_empty());
+}
+
+#[test]
+fn a_target_that_is_a_folder_fails_with_1_and_leaves_no_partial_file() {
+    let dir = scratch("adversarial_folder_target");
+    std::fs::create_dir(dir.join("out.png")).unwrap();
+    let target = dir.join("out.png");
+    let out = p3trace(&[
+        "render",
+        &showcase(),
+        "--resolution",
+        "8x8",
+        "-o",
+        target.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("cannot write"), "{}", stderr(&out));
+    assert_eq!(files_in(&dir), ["out.png"]);
+    assert!(target.is_dir());
+}
+
+/// A full disk, as the file size limit makes one: writes fail with "file too large"
+/// (the shell ignores SIGXFSZ, which would otherwise kill the process mid-write).
+#[test]
+fn a_full_disk_keeps_the_old_image_and_leaves_no_partial_file() {
+    let dir = scratch("adversarial_full_disk");
+    let target = dir.join("out.ppm");
+    std::fs::write(&target, b"the previous image").unwrap();
+    let out = Command::new("sh")
+        .args([
+            "-c",
+            "trap '' XFSZ; ulimit -f 8 && exec \"$0\" \"$@\"",
+            env!("CARGO_BIN_EXE_p3trace"),
+            "render",
+            &showcase(),
+            "--resolution",
+            "256x256",
+            "-o",
+            target.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("cannot write"), "{}", stderr(&out));
+    assert_eq!(files_in(&dir), ["out.ppm"]);
+    assert_eq!(std::fs::read(&target).unwrap(), b"the previous image");
+}
+
+#[test]
+fn ctrl_c_exits_130_and_leaves_no_image() {
+    let dir = scratch("adversarial_ctrl_c");
+    let target = dir.join("out.png");
+    // Minutes of work on one thread: still rendering when the interrupt comes.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_p3trace"))
+        .args([
+            "render",
+            &showcase(),
+            "--resolution",
+            "1024x1024",
+            "--spp",
+            "256",
+            "--threads",
+            "1",
+            "-o",
+            target.to_str().unwrap(),
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the render ended before the interrupt"
+    );
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(30) {
+            child.kill().unwrap();
+            panic!("p3trace did not stop within 30 s of Ctrl-C");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().unwrap();
+    let message = stderr(&out);
+    assert_eq!(out.status.code(), Some(130), "{message}");
+    assert!(message.contains("p3trace: interrupted"), "{message}");
+    assert!(files_in(&dir).is_empty(), "{:?}", files_in(&dir));
+}

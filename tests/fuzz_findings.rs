@@ -1,0 +1,146 @@
+//! Every input the fuzzers (`fuzz/`) found wrong, kept as a test once fixed, with what
+//! was wrong and where it was fixed.
+
+use glam::Vec3;
+use p3trace::accel::AccelKind;
+use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
+use p3trace::scene::p3f::parse_text;
+
+fn error_of(text: &str) -> String {
+    match parse_text(text) {
+        Ok(_) => panic!("accepted: {text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// accel_agreement, crash-82e133928311: a moving sphere 4e37 units out that crosses the
+/// scene in 2e-40 time units. Its centre overflowed to infinity within the shutter, so
+/// its box was not finite: the grid dropped it while brute force hit it at time 0.
+/// Fixed in the reader: numbers are at most 1e9 in magnitude, and a moving sphere's
+/// times are equal or at least 1e-9 apart.
+#[test]
+fn moving_sphere_leaving_the_floats_is_refused() {
+    let finding = "ms -42193246000000000000000000000000000000 -1.5 3.5 -1.5 \
+                   0.000000000000000000000000000000000000019744989 0 4 \
+                   0 0.00000000000000000000000000000000000000018295";
+    assert_eq!(
+        error_of(finding),
+        "<text>:1:4: in 'ms': the centre at time t0 must be at most 1e9 in magnitude, \
+         found '-42193246000000000000000000000000000000'"
+    );
+    // The same path within the magnitude limit still overflows through its time span.
+    let e = error_of("ms -1000 -1.5 3.5 -1.5 0 0 4 0 1.8295e-40");
+    assert!(
+        e.starts_with("<text>:1:1: in 'ms': t0 and t1 must be equal or at least 1e-9 apart"),
+        "{e}"
+    );
+    // At the limits themselves the scene is read.
+    parse_text("ms -1e9 0 0 1e9 0 0 1e9 0 1e-9").unwrap();
+    parse_text("ms 0 0 0 1 0 0 1 0.5 0.5").unwrap();
+}
+
+/// accel_agreement, crash-79382fae684d: a ray starting in the plane of a box's `y = 0`
+/// face, running along it and away from the box. With glam 0.34.3 (which the fuzz crate
+/// had resolved) `Vec3::min_element` changed its order, and the NaN slab of that face hid
+/// the `x` slab: the box test hit at a point beside the box, and the grid's packet kernel,
+/// which keeps the old order, did not. Fixed in `intersect::aabb`, which now fixes its own
+/// order; the fuzz crate's lock file follows the project's.
+#[test]
+fn ray_along_a_box_face_hits_nothing_beside_it() {
+    use p3trace::accel::bvh::{BvhBuild, BvhWidth};
+    use p3trace::accel::{Accel, AccelOptions, Tracer};
+    use p3trace::ray::Ray;
+    let scene = parse_text("box 1 0 9.770531e-38 1e9 -1e9 -1e9").unwrap();
+    let g = &scene.geometry;
+    let ray = Ray::new(
+        Vec3::new(9.624357e-38, 0.0, 0.0),
+        Vec3::new(-1.0, 0.0, 1.0).normalize(),
+    );
+    assert_eq!(
+        Tracer::new(g, Accel::None).closest(&ray, 0.0, f32::INFINITY),
+        None
+    );
+    for (kind, width) in [
+        (AccelKind::Grid, None),
+        (AccelKind::Bvh, Some(BvhWidth::Two)),
+        (AccelKind::Bvh, Some(BvhWidth::Eight)),
+    ] {
+        let options = AccelOptions {
+            kind,
+            bvh: BvhBuild::Sah,
+            bvh_width: width,
+            ..AccelOptions::default()
+        };
+        let tracer = Tracer::new(g, Accel::build(g, &options).0);
+        let name = tracer.accel.name();
+        assert_eq!(tracer.closest(&ray, 0.0, f32::INFINITY), None, "{name}");
+        assert_eq!(
+            tracer.closest_packet(&[ray; 8], 0xFF, f32::INFINITY),
+            [None; 8],
+            "{name}"
+        );
+        assert_eq!(
+            tracer.occluded_packet(&[ray; 8], &[f32::INFINITY; 8], 0xFF),
+            0,
+            "{name}"
+        );
+    }
+}
+
+/// The scene of accel_agreement's crash-5459e968fd71: two copies of a plane 1e9 away, a
+/// sphere with the lights inside it. Rendered with `kind` in `mode` against brute force
+/// one ray at a time; the first differing pixel, if any.
+fn far_plane_difference(kind: AccelKind, mode: RenderMode) -> Option<String> {
+    let plane = "pl -1e9 -1e9 -1e9 -1e9 -1e9 1e9 3.5 1e9 -1e9\n";
+    let text = format!(
+        "{plane}{plane}s 2.5 2.5 2.5 2.5\nl 2.5 2.5 2.5 2.5 2.5 2.5\n\
+         l 2.5 2.5 2.5 2.5 2.5 2.5\nl 2.5 2.5 2.5 2.5 0 0\n"
+    );
+    let mut scene = parse_text(&text).unwrap();
+    scene.camera.from = Vec3::ZERO;
+    scene.camera.at = Vec3::new(0.0, 0.0, -1e9);
+    scene.camera.up = Vec3::splat(-1e9);
+    scene.camera.angle = 78.0;
+    let mut options = RenderOptions::from_scene(&scene);
+    (options.width, options.height) = (8, 6);
+    options.threads = Some(1);
+    options.shade.max_depth = 3;
+    options.sampling = Sampling::Jittered(2);
+    let mut image = |kind, mode| {
+        options.accel.kind = kind;
+        options.mode = mode;
+        render(&scene, &options).unwrap().film.pixels
+    };
+    let expected = image(AccelKind::None, RenderMode::Scalar);
+    let got = image(kind, mode);
+    let bits = |p: &Vec3| p.to_array().map(f32::to_bits);
+    (0..got.len())
+        .find(|&k| bits(&got[k]) != bits(&expected[k]))
+        .map(|k| format!("pixel {k}: {} against {}", got[k], expected[k]))
+}
+
+/// accel_agreement, crash-5459e968fd71: the grid lit a pixel of the far plane that brute
+/// force shadows. With `max_depth` 1 it still differed, so a shadow ray: it starts on the
+/// plane some 1e9 from a grid 5 units wide, and the grid's box test, rounding its
+/// distances (about 1e9, 64 apart from one float to the next) one way, missed the box
+/// that the sphere's own test found the ray in. Fixed in `accel::grid`: the box test
+/// widens its interval by the rounding it can have.
+#[test]
+fn the_grid_finds_a_shadow_ray_from_1e9_away() {
+    for mode in [RenderMode::Scalar, RenderMode::Packet] {
+        let difference = far_plane_difference(AccelKind::Grid, mode);
+        assert_eq!(difference, None, "{mode:?}");
+    }
+}
+
+/// The same scene through the BVH: its node test has the same limit (as the SIMD twins
+/// repeat it, the fix is to be made in all three at once). NOT FIXED; run it with
+/// `--ignored`.
+#[test]
+#[ignore = "open fuzz finding: the BVH misses a shadow ray from 1e9 away"]
+fn the_bvh_finds_a_shadow_ray_from_1e9_away() {
+    for mode in [RenderMode::Scalar, RenderMode::Packet] {
+        let difference = far_plane_difference(AccelKind::Bvh, mode);
+        assert_eq!(difference, None, "{mode:?}");
+    }
+}
