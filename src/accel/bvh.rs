@@ -19,7 +19,7 @@ use glam::Vec3;
 use super::bounds::{prim_bounds, Aabb};
 use super::wide::Bvh8;
 use super::{ClosestHit, BOUNDED};
-use crate::intersect::slab_entry;
+use crate::intersect::{slab_entry, FAR_WIDENING};
 use crate::ray::{PrimId, Ray};
 use crate::scene::Geometry;
 
@@ -209,8 +209,9 @@ impl Bvh {
         while depth > 0 {
             depth -= 1;
             let (mut index, t_entry) = stack[depth];
-            // Entries beyond the closest hit cannot hold a closer one (ties may).
-            if t_entry > closest.limit() {
+            // Entries beyond the closest hit cannot hold a closer one (ties may); by the
+            // node test's own rounding allowance.
+            if t_entry > closest.limit() * FAR_WIDENING {
                 continue;
             }
             loop {

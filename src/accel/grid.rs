@@ -13,6 +13,7 @@ use glam::{IVec3, UVec3, Vec3};
 
 use super::bounds::{prim_bounds, Aabb};
 use super::{for_lanes, AccelOptions, ClosestHit, BOUNDED};
+use crate::intersect::GAMMA_3;
 use crate::ray::{lane_mask, Hit, PrimId, Ray, RayPacket};
 use crate::scene::Geometry;
 
@@ -527,10 +528,6 @@ fn slab(b: &Aabb, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<(f
     }
     (near <= far).then_some((near, far))
 }
-
-/// The relative error bound of three rounded operations, `3 u / (1 - 3 u)` with `u` the
-/// unit roundoff (PBRT's `gamma(3)`).
-const GAMMA_3: f32 = 3.0 * (f32::EPSILON / 2.0) / (1.0 - 3.0 * (f32::EPSILON / 2.0));
 
 /// `t` moved by `2 GAMMA_3` of itself towards `direction` (-1 or 1), by a product so
 /// that infinities stay what they are.

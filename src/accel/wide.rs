@@ -21,7 +21,7 @@ use super::bvh::Node;
 use super::{for_lanes, ClosestHit};
 use crate::intersect::{
     slab_entry8, slab_entry_packet, sphere_leaf, triangle_leaf, BoxPack8, SpherePack8,
-    TrianglePack8,
+    TrianglePack8, FAR_WIDENING,
 };
 use crate::ray::{Hit, PrimId, PrimKind, Ray, RayPacket};
 use crate::scene::Geometry;
@@ -330,8 +330,9 @@ impl Bvh8 {
             depth -= 1;
             // SAFETY: every slot below `depth` was written before `depth` passed it.
             let (child, t_entry) = unsafe { stack[depth].assume_init() };
-            // Entries beyond the closest hit cannot hold a closer one (ties may).
-            if t_entry > closest.limit() {
+            // Entries beyond the closest hit cannot hold a closer one (ties may); by the
+            // node test's own rounding allowance.
+            if t_entry > closest.limit() * FAR_WIDENING {
                 continue;
             }
             if child & LEAF != 0 {
@@ -433,7 +434,7 @@ impl Bvh8 {
             let (child, lanes, t_entry) = unsafe { stack[depth].assume_init() };
             // Beyond every lane's closest hit: nothing closer inside (ties are visited).
             let farthest = limit.to_array();
-            if (0..8).all(|k| lanes & (1 << k) == 0 || t_entry > farthest[k]) {
+            if (0..8).all(|k| lanes & (1 << k) == 0 || t_entry > farthest[k] * FAR_WIDENING) {
                 continue;
             }
             if child & LEAF != 0 || lanes.count_ones() <= SINGLE_RAY_LANES {

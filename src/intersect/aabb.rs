@@ -1,6 +1,6 @@
 use glam::Vec3;
 
-use super::{first_root_in, first_root_in8};
+use super::{first_root_in, first_root_in8, GAMMA_3};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -179,8 +179,15 @@ pub fn slab_entry(
         near = greater(lesser(t1, t2), near);
         far = lesser(greater(t1, t2), far);
     }
-    (near <= far).then_some(near)
+    (near <= far * FAR_WIDENING).then_some(near)
 }
+
+/// The node test compares its entry with its exit widened by this factor: each slab
+/// distance carries up to `GAMMA_3` of itself in rounding, so without it a ray starting
+/// far from a box (1e9 away, where floats are 64 apart) could pass beside a box that
+/// the objects' own tests find it in (fuzz finding 3). Traversals skip a stacked node
+/// by the same rule: when its entry exceeds the closest hit times this factor.
+pub const FAR_WIDENING: f32 = 1.0 + 2.0 * GAMMA_3;
 
 /// [`slab_entry`] for eight rays against one box (packet traversal); lanes outside
 /// `active` miss.
@@ -246,7 +253,7 @@ fn slab_lanes(
         near = a.min(b).max(near);
         far = a.max(b).min(far);
     }
-    (near.le(far), near)
+    (near.le(far * F32x8::splat(FAR_WIDENING)), near)
 }
 
 /// Outward normal of the face of `[min, max]` nearest to the point `p` (a hit point).

@@ -21,7 +21,8 @@ mod sphere;
 mod triangle;
 
 pub use aabb::{
-    aabb, aabb_leaf, aabb_normal, aabb_packet, slab_entry, slab_entry8, slab_entry_packet, BoxPack8,
+    aabb, aabb_leaf, aabb_normal, aabb_packet, slab_entry, slab_entry8, slab_entry_packet,
+    BoxPack8, FAR_WIDENING,
 };
 pub use cone::{cone, cone_normal, cone_packet};
 pub use plane::{plane, plane_packet};
@@ -31,6 +32,11 @@ pub use triangle::{
 };
 
 use crate::simd::{F32x8, Mask8};
+
+/// The relative error bound of three rounded operations, `3 u / (1 - 3 u)` with `u` the
+/// unit roundoff (PBRT's `gamma(3)`): a slab distance `(bound - origin) * inv_dir` is off
+/// by at most this much of itself.
+pub const GAMMA_3: f32 = 3.0 * (f32::EPSILON / 2.0) / (1.0 - 3.0 * (f32::EPSILON / 2.0));
 
 /// The first of two roots `near <= far` that lies in `(t_min, t_max)`: the entry of a
 /// convex shape, or its exit when the origin is inside.
