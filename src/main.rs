@@ -30,12 +30,13 @@ enum Failure {
 }
 
 /// The exit status after Ctrl-C: 128 + SIGINT, as a shell reports a process it stopped.
+/// SIGTERM and SIGHUP take the same way out, with the same status.
 const INTERRUPTED: i32 = 130;
 
 fn main() -> ExitCode {
-    // On Ctrl-C, remove the file being written, if any, and leave. Should the handler fail
-    // to install, Ctrl-C keeps its default action: the target is still never truncated,
-    // but a `.partial` file may stay.
+    // On Ctrl-C, SIGTERM or SIGHUP, remove the file being written, if any, and leave.
+    // Should the handler fail to install, the signals keep their default action: the
+    // target is still never truncated, but a `.partial` file may stay.
     let _ = ctrlc::set_handler(|| {
         let _held_until_exit = p3trace::output::abandon_partial_files();
         eprintln!("p3trace: interrupted");

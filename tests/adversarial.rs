@@ -375,8 +375,15 @@ fn a_full_disk_keeps_the_old_image_and_leaves_no_partial_file() {
 }
 
 #[test]
-fn ctrl_c_exits_130_and_leaves_no_image() {
-    let dir = scratch("adversarial_ctrl_c");
+fn ctrl_c_and_termination_exit_130_and_leave_no_image() {
+    for signal in ["-INT", "-TERM", "-HUP"] {
+        interrupted_render_leaves_no_image(signal);
+    }
+}
+
+/// Sends `signal` (a `kill` option) to a long render.
+fn interrupted_render_leaves_no_image(signal: &str) {
+    let dir = scratch(&format!("adversarial_signal{signal}"));
     let target = dir.join("out.png");
     // Minutes of work on one thread: still rendering when the interrupt comes.
     let mut child = Command::new(env!("CARGO_BIN_EXE_p3trace"))
@@ -402,7 +409,7 @@ fn ctrl_c_exits_130_and_leaves_no_image() {
         "the render ended before the interrupt"
     );
     let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([signal, &child.id().to_string()])
         .status()
         .unwrap();
     assert!(kill.success());
@@ -410,13 +417,13 @@ fn ctrl_c_exits_130_and_leaves_no_image() {
     while child.try_wait().unwrap().is_none() {
         if start.elapsed() > Duration::from_secs(30) {
             child.kill().unwrap();
-            panic!("p3trace did not stop within 30 s of Ctrl-C");
+            panic!("p3trace did not stop within 30 s of {signal}");
         }
         std::thread::sleep(Duration::from_millis(20));
     }
     let out = child.wait_with_output().unwrap();
     let message = stderr(&out);
-    assert_eq!(out.status.code(), Some(130), "{message}");
+    assert_eq!(out.status.code(), Some(130), "{signal}: {message}");
     assert!(message.contains("p3trace: interrupted"), "{message}");
     assert!(files_in(&dir).is_empty(), "{:?}", files_in(&dir));
 }
