@@ -352,8 +352,8 @@ impl<'a> Shader<'a> {
         if depth >= self.options.max_depth {
             return colour.clamp(Vec3::ZERO, Vec3::ONE);
         }
-        let (reflected, transmitted) = (sample.spawn(0), sample.spawn(1));
         let mut reflect = || {
+            let reflected = sample.spawn(0);
             let mirror = (ray.dir - 2.0 * ray.dir.dot(nf) * nf).normalize();
             let ray = Ray {
                 origin: p + EPS * nf,
@@ -377,18 +377,18 @@ impl<'a> Shader<'a> {
                 } else {
                     fresnel(ior_here, ior_next, cos_i, cos_t)
                 };
-                let transmitted_ray = Ray {
-                    origin: p - EPS * nf,
-                    dir: (eta * ray.dir + (eta * cos_i - cos_t) * nf).normalize(),
-                    time: ray.time,
-                };
                 if kr > 0.0 {
                     colour += kr * material.specular * reflect();
                 }
                 if kr < 1.0 {
-                    colour += (1.0 - kr)
-                        * material.diffuse
-                        * self.trace(&transmitted_ray, &transmitted, depth + 1, ior_next, rays);
+                    let transmitted = Ray {
+                        origin: p - EPS * nf,
+                        dir: (eta * ray.dir + (eta * cos_i - cos_t) * nf).normalize(),
+                        time: ray.time,
+                    };
+                    let seen =
+                        self.trace(&transmitted, &sample.spawn(1), depth + 1, ior_next, rays);
+                    colour += (1.0 - kr) * material.diffuse * seen;
                 }
             }
         } else if material.ks > 0.0 {
