@@ -7,7 +7,7 @@ use std::hint::black_box;
 use std::path::PathBuf;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use p3trace::accel::bvh::BvhBuild;
+use p3trace::accel::BvhBuild;
 use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
 use p3trace::bench::ray_sets;
 use p3trace::scene::{parse_file, Scene};

@@ -13,8 +13,8 @@ use cli::{
     AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand,
     ModeChoice, RenderArgs, SceneOutput, UpAxis,
 };
-use p3trace::accel::bvh::{BvhBuild, BvhWidth};
 use p3trace::accel::{Accel, AccelKind, AccelOptions};
+use p3trace::accel::{BvhBuild, BvhWidth};
 use p3trace::ray::PrimKind;
 use p3trace::render::film::OutputFormat;
 use p3trace::render::{self, RenderMode, RenderOptions, Sampling};

@@ -4,8 +4,8 @@
 mod common;
 
 use glam::Vec3;
-use p3trace::accel::bvh::{BvhBuild, BvhWidth};
 use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
+use p3trace::accel::{BvhBuild, BvhWidth};
 use p3trace::ray::Ray;
 use p3trace::render::{render, RenderOptions};
 use p3trace::scene::p3f::parse_text;

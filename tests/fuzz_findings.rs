@@ -47,8 +47,8 @@ fn moving_sphere_leaving_the_floats_is_refused() {
 /// order; the fuzz crate's lock file follows the project's.
 #[test]
 fn ray_along_a_box_face_hits_nothing_beside_it() {
-    use p3trace::accel::bvh::{BvhBuild, BvhWidth};
     use p3trace::accel::{Accel, AccelOptions, Tracer};
+    use p3trace::accel::{BvhBuild, BvhWidth};
     use p3trace::ray::Ray;
     let scene = parse_text("box 1 0 9.770531e-38 1e9 -1e9 -1e9").unwrap();
     let g = &scene.geometry;

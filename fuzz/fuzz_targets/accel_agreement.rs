@@ -6,7 +6,7 @@
 use arbitrary::Arbitrary;
 use glam::Vec3;
 use libfuzzer_sys::fuzz_target;
-use p3trace::accel::bvh::{BvhBuild, BvhWidth};
+use p3trace::accel::{BvhBuild, BvhWidth};
 use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
 use p3trace::ray::{Hit, Ray};
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};

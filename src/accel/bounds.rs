@@ -5,6 +5,16 @@ use glam::Vec3;
 use crate::ray::{PrimId, PrimKind};
 use crate::scene::Geometry;
 
+/// The bounded primitive kinds, in [`PrimId`] order: every kind but planes, which no
+/// structure holds.
+pub const BOUNDED: [PrimKind; 5] = [
+    PrimKind::Sphere,
+    PrimKind::MovingSphere,
+    PrimKind::Triangle,
+    PrimKind::Box,
+    PrimKind::Cone,
+];
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
     pub min: Vec3,

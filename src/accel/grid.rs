@@ -11,8 +11,8 @@ use std::cell::RefCell;
 
 use glam::{IVec3, UVec3, Vec3};
 
-use super::bounds::{prim_bounds, Aabb};
-use super::{for_lanes, AccelOptions, ClosestHit, BOUNDED};
+use super::bounds::{prim_bounds, Aabb, BOUNDED};
+use super::hit::{for_lanes, ClosestHit};
 use crate::intersect::GAMMA_3;
 use crate::ray::{lane_mask, Hit, PrimId, Ray, RayPacket};
 use crate::scene::Geometry;
@@ -39,12 +39,15 @@ pub struct Grid {
 }
 
 impl Grid {
-    pub fn build(geometry: &Geometry, options: &AccelOptions) -> Grid {
+    /// The report's grid over the bounded primitives of `geometry`, `density` its `m`,
+    /// moving spheres bounded over `shutter`; with `mailbox`, an object spanning several
+    /// cells is tested once per ray.
+    pub fn build(geometry: &Geometry, density: f32, mailbox: bool, shutter: [f32; 2]) -> Grid {
         let mut prims = Vec::with_capacity(geometry.bounded_count());
         let mut boxes = Vec::with_capacity(geometry.bounded_count());
         for kind in BOUNDED {
             for prim in geometry.ids(kind) {
-                let b = prim_bounds(geometry, prim, options.shutter);
+                let b = prim_bounds(geometry, prim, shutter);
                 if !b.is_empty() {
                     prims.push(prim);
                     boxes.push(b);
@@ -58,7 +61,7 @@ impl Grid {
             // Padding keeps a flat scene's box from having zero volume.
             let scale = tight.extent().max_element().max(1e-6);
             let bounds = tight.padded(scale * 1e-4);
-            let resolution = cells_per_axis(bounds.extent(), prims.len(), options.grid_density);
+            let resolution = cells_per_axis(bounds.extent(), prims.len(), density);
             (bounds, resolution)
         };
         let cell_size = bounds.extent() / resolution.as_vec3();
@@ -71,8 +74,8 @@ impl Grid {
             cell_start: Vec::new(),
             refs: Vec::new(),
             prims,
-            density: options.grid_density,
-            mailbox: options.mailbox,
+            density,
+            mailbox,
         };
         grid.fill(&boxes);
         grid

@@ -9,39 +9,55 @@
 //! structure are the same byte for byte.
 
 pub mod bounds;
-pub mod bvh;
+pub mod bvh2;
+pub mod bvh8;
 pub mod grid;
+mod hit;
 mod none;
-pub mod wide;
+mod stack;
 
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
-use crate::ray::{lane_mask, Hit, PrimId, PrimKind, Ray};
+use crate::ray::{lane_mask, Hit, PrimKind, Ray};
 pub use crate::scene::AccelKind;
 use crate::scene::Geometry;
-use bvh::{Bvh, BvhBuild, BvhWidth};
+use bvh2::Bvh2;
+pub use bvh2::BvhBuild;
+use bvh8::Bvh8;
 use grid::Grid;
-use wide::Bvh8;
+pub use hit::ClosestHit;
 
-/// The bounded primitive kinds, in [`PrimId`] order.
-pub const BOUNDED: [PrimKind; 5] = [
-    PrimKind::Sphere,
-    PrimKind::MovingSphere,
-    PrimKind::Triangle,
-    PrimKind::Box,
-    PrimKind::Cone,
-];
-
-/// The acceleration structure over a scene's bounded primitives.
+/// The acceleration structure over a scene's bounded primitives: one variant per
+/// traversal engine.
 #[derive(Clone, Debug)]
 pub enum Accel {
     /// Every ray is tested against every primitive: the reference the others are checked
     /// against.
     None,
     Grid(Grid),
-    Bvh(Bvh),
+    /// The binary BVH, traversed as built.
+    Bvh2(Bvh2),
+    /// The binary BVH collapsed to 8-wide nodes; packets traverse it together.
+    Bvh8(Bvh8),
+}
+
+/// Children per node that BVH traversal sees: the binary tree as built, or the tree
+/// collapsed to 8-wide nodes ([`Bvh8`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BvhWidth {
+    Two,
+    Eight,
+}
+
+/// The SAH tree is collapsed to 8-wide nodes; the report's BVH stays binary, as the
+/// report traverses it.
+pub fn default_width(build: BvhBuild) -> BvhWidth {
+    match build {
+        BvhBuild::Midpoint => BvhWidth::Two,
+        BvhBuild::Sah => BvhWidth::Eight,
+    }
 }
 
 /// How to build the structure.
@@ -79,10 +95,22 @@ impl Accel {
         let start = Instant::now();
         let accel = match options.kind {
             AccelKind::None => Accel::None,
-            AccelKind::Grid => Accel::Grid(Grid::build(geometry, options)),
+            AccelKind::Grid => Accel::Grid(Grid::build(
+                geometry,
+                options.grid_density,
+                options.mailbox,
+                options.shutter,
+            )),
             AccelKind::Bvh => {
-                let width = options.bvh_width.unwrap_or(options.bvh.default_width());
-                Accel::Bvh(Bvh::build(geometry, options.bvh, width, options.shutter))
+                let bvh2 = Bvh2::build(geometry, options.bvh, options.shutter);
+                match options.bvh_width.unwrap_or(default_width(options.bvh)) {
+                    BvhWidth::Two => Accel::Bvh2(bvh2),
+                    // A tree too large for the 8-wide encoding stays binary.
+                    BvhWidth::Eight => match Bvh8::collapse(bvh2, geometry) {
+                        Ok(bvh8) => Accel::Bvh8(bvh8),
+                        Err(bvh2) => Accel::Bvh2(bvh2),
+                    },
+                }
             }
         };
         (accel, start.elapsed())
@@ -94,7 +122,8 @@ impl Accel {
         match self {
             Accel::None => "none".into(),
             Accel::Grid(g) => g.name(),
-            Accel::Bvh(b) => b.name(),
+            Accel::Bvh2(b) => b.name(),
+            Accel::Bvh8(b) => b.name(),
         }
     }
 
@@ -103,74 +132,9 @@ impl Accel {
         match self {
             Accel::None => vec![],
             Accel::Grid(g) => g.stats(),
-            Accel::Bvh(b) => b.stats(),
+            Accel::Bvh2(b) => b.stats().lines(&b.name()),
+            Accel::Bvh8(b) => b.stats(),
         }
-    }
-}
-
-/// The closest hit found so far along a ray, with the tie rule of brute force: at equal
-/// `t` the smaller [`PrimId`] wins, whatever order the primitives are tested in.
-#[derive(Clone, Copy, Debug)]
-pub struct ClosestHit {
-    pub hit: Option<Hit>,
-    t_max: f32,
-}
-
-impl ClosestHit {
-    pub fn new(t_max: f32) -> Self {
-        ClosestHit { hit: None, t_max }
-    }
-
-    /// Hits at or beyond this distance cannot win; a hit exactly at it may (a tie).
-    pub fn limit(&self) -> f32 {
-        self.hit.map_or(self.t_max, |h| h.t)
-    }
-
-    /// The upper end of the interval for the next test: the routines take an open
-    /// interval, so a tie with the best hit needs the next float up.
-    pub fn bound(&self) -> f32 {
-        match self.hit {
-            Some(h) => h.t.next_up(),
-            None => self.t_max,
-        }
-    }
-
-    /// Keeps `hit` if it is closer than the best, or as close with a smaller id.
-    pub fn offer(&mut self, hit: Hit) {
-        let wins = self
-            .hit
-            .is_none_or(|best| hit.t < best.t || (hit.t == best.t && hit.prim < best.prim));
-        if wins {
-            self.hit = Some(hit);
-        }
-    }
-
-    /// Tests `prim` and keeps its hit if it wins.
-    pub fn test(
-        &mut self,
-        geometry: &Geometry,
-        prim: PrimId,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-    ) {
-        if let Some(h) = geometry.intersect(prim, ray, inv_dir, t_min, self.bound()) {
-            self.offer(Hit {
-                t: h.t,
-                prim,
-                u: h.u,
-                v: h.v,
-            });
-        }
-    }
-}
-
-/// Calls `f` with the index of each set bit of `mask`, lowest first.
-#[inline]
-fn for_lanes(mut mask: u8, mut f: impl FnMut(usize)) {
-    while mask != 0 {
-        f(mask.trailing_zeros() as usize);
-        mask &= mask - 1;
     }
 }
 
@@ -201,7 +165,8 @@ impl<'s> Tracer<'s> {
         match &self.accel {
             Accel::None => none::closest(g, ray, inv_dir, t_min, &mut closest),
             Accel::Grid(grid) => grid.closest(g, ray, inv_dir, t_min, &mut closest),
-            Accel::Bvh(bvh) => bvh.closest(g, ray, inv_dir, t_min, &mut closest),
+            Accel::Bvh2(bvh) => bvh.closest(g, ray, inv_dir, t_min, &mut closest),
+            Accel::Bvh8(bvh) => bvh.closest(g, ray, inv_dir, t_min, &mut closest),
         }
         self.nearer_plane(ray, inv_dir, t_min, t_max, closest.hit)
     }
@@ -231,7 +196,8 @@ impl<'s> Tracer<'s> {
             || match &self.accel {
                 Accel::None => none::occluded(g, ray, inv_dir, t_min, t_max),
                 Accel::Grid(grid) => grid.occluded(g, ray, inv_dir, t_min, t_max),
-                Accel::Bvh(bvh) => bvh.occluded(g, ray, inv_dir, t_min, t_max),
+                Accel::Bvh2(bvh) => bvh.occluded(g, ray, inv_dir, t_min, t_max),
+                Accel::Bvh8(bvh) => bvh.occluded(g, ray, inv_dir, t_min, t_max),
             }
     }
 
@@ -242,10 +208,10 @@ impl<'s> Tracer<'s> {
         let active = active & traceable(rays);
         let mut closest = [ClosestHit::new(t_max); 8];
         let g = self.geometry;
-        match (&self.accel, self.wide()) {
-            (_, Some(wide)) => wide.closest_packet(g, rays, active, 0.0, &mut closest),
-            (Accel::Grid(grid), _) => grid.closest_packet(g, rays, active, 0.0, &mut closest),
-            _ => {
+        match &self.accel {
+            Accel::Bvh8(bvh) => bvh.closest_packet(g, rays, active, 0.0, &mut closest),
+            Accel::Grid(grid) => grid.closest_packet(g, rays, active, 0.0, &mut closest),
+            Accel::None | Accel::Bvh2(_) => {
                 return std::array::from_fn(|k| {
                     (active & (1 << k) != 0)
                         .then(|| self.closest(&rays[k], 0.0, t_max))
@@ -274,20 +240,14 @@ impl<'s> Tracer<'s> {
         });
         let rest = active & !by_plane;
         let g = self.geometry;
-        let blocked = match (&self.accel, self.wide()) {
-            (_, Some(wide)) => wide.occluded_packet(g, rays, rest, 0.0, t_max),
-            (Accel::Grid(grid), _) => grid.occluded_packet(g, rays, rest, 0.0, t_max),
-            _ => lane_mask(|k| rest & (1 << k) != 0 && self.occluded(&rays[k], 0.0, t_max[k])),
+        let blocked = match &self.accel {
+            Accel::Bvh8(bvh) => bvh.occluded_packet(g, rays, rest, 0.0, t_max),
+            Accel::Grid(grid) => grid.occluded_packet(g, rays, rest, 0.0, t_max),
+            Accel::None | Accel::Bvh2(_) => {
+                lane_mask(|k| rest & (1 << k) != 0 && self.occluded(&rays[k], 0.0, t_max[k]))
+            }
         };
         by_plane | blocked
-    }
-
-    /// The 8-wide BVH, when the structure is one.
-    fn wide(&self) -> Option<&Bvh8> {
-        match &self.accel {
-            Accel::Bvh(bvh) => bvh.wide(),
-            _ => None,
-        }
     }
 
     fn closest_plane(&self, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {

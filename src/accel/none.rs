@@ -2,7 +2,8 @@
 
 use glam::Vec3;
 
-use super::{ClosestHit, BOUNDED};
+use super::bounds::BOUNDED;
+use super::hit::ClosestHit;
 use crate::ray::Ray;
 use crate::scene::Geometry;
 

@@ -1,0 +1,70 @@
+//! The 8-wide node: eight children's boxes side by side and their references, and the
+//! encoding of a reference to a node or to a leaf.
+
+use glam::Vec3;
+
+use crate::intersect::{slab_entry8, BoxPack8};
+use crate::simd::Mask8;
+
+/// Children per node.
+pub const WIDTH: usize = 8;
+
+/// A child reference: a node index, or a leaf (the top bit) with its kind in bits 29..31,
+/// its primitive count less one in bits 26..29, and below, its first primitive (a run of
+/// `prims`) or its pack.
+pub type ChildRef = u32;
+pub const LEAF: u32 = 1 << 31;
+const KIND_SHIFT: u32 = 29;
+const COUNT_SHIFT: u32 = 26;
+const INDEX_MASK: u32 = (1 << COUNT_SHIFT) - 1;
+/// The kinds of leaf.
+pub const RUN: u32 = 0;
+pub const TRIANGLES: u32 = 1;
+pub const SPHERES: u32 = 2;
+/// The most primitives a leaf may hold, and the most a tree may hold, to be encoded.
+pub const MAX_LEAF_PRIMS: usize = 1 << (KIND_SHIFT - COUNT_SHIFT);
+pub const MAX_PRIMS: usize = INDEX_MASK as usize + 1;
+
+pub fn leaf_ref(kind: u32, count: usize, index: usize) -> ChildRef {
+    LEAF | kind << KIND_SHIFT | ((count as u32 - 1) << COUNT_SHIFT) | index as u32
+}
+
+/// A leaf reference's kind, primitive count and index.
+pub fn leaf_parts(child: ChildRef) -> (u32, usize, usize) {
+    (
+        (child & !LEAF) >> KIND_SHIFT,
+        ((child >> COUNT_SHIFT) & (MAX_LEAF_PRIMS as u32 - 1)) as usize + 1,
+        (child & INDEX_MASK) as usize,
+    )
+}
+
+/// Eight children's boxes side by side, then their references: 228 bytes of data padded
+/// to four cache lines.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct Node8 {
+    pub boxes: BoxPack8,
+    pub child: [ChildRef; WIDTH],
+    /// Children in use: slots `0..count`. The others hold padding boxes, which no box
+    /// value can make the slab test miss, so they are left out of its mask.
+    pub count: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<Node8>() == 256);
+
+impl Node8 {
+    /// The used children that the ray enters within `[t_min, t_max]`, as a bit mask, and
+    /// their entry distances (lanes outside the mask are unspecified).
+    #[inline]
+    pub fn entries(
+        &self,
+        origin: Vec3,
+        inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> (u8, [f32; WIDTH]) {
+        let used = Mask8::from_bitmask(((1u32 << self.count) - 1) as u8);
+        let (hit, t) = slab_entry8(origin, inv_dir, &self.boxes, t_min, t_max, used);
+        (hit.bitmask(), t.to_array())
+    }
+}

@@ -1,0 +1,73 @@
+//! The closest-hit rule every structure keeps: the smallest `t`, and at equal `t` the
+//! smallest [`PrimId`], whatever order the primitives are tested in.
+
+use glam::Vec3;
+
+use crate::ray::{Hit, PrimId, Ray};
+use crate::scene::Geometry;
+
+/// The closest hit found so far along a ray, with the tie rule of brute force: at equal
+/// `t` the smaller [`PrimId`] wins, whatever order the primitives are tested in.
+#[derive(Clone, Copy, Debug)]
+pub struct ClosestHit {
+    pub hit: Option<Hit>,
+    t_max: f32,
+}
+
+impl ClosestHit {
+    pub fn new(t_max: f32) -> Self {
+        ClosestHit { hit: None, t_max }
+    }
+
+    /// Hits at or beyond this distance cannot win; a hit exactly at it may (a tie).
+    pub fn limit(&self) -> f32 {
+        self.hit.map_or(self.t_max, |h| h.t)
+    }
+
+    /// The upper end of the interval for the next test: the routines take an open
+    /// interval, so a tie with the best hit needs the next float up.
+    pub fn bound(&self) -> f32 {
+        match self.hit {
+            Some(h) => h.t.next_up(),
+            None => self.t_max,
+        }
+    }
+
+    /// Keeps `hit` if it is closer than the best, or as close with a smaller id.
+    pub fn offer(&mut self, hit: Hit) {
+        let wins = self
+            .hit
+            .is_none_or(|best| hit.t < best.t || (hit.t == best.t && hit.prim < best.prim));
+        if wins {
+            self.hit = Some(hit);
+        }
+    }
+
+    /// Tests `prim` and keeps its hit if it wins.
+    pub fn test(
+        &mut self,
+        geometry: &Geometry,
+        prim: PrimId,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+    ) {
+        if let Some(h) = geometry.intersect(prim, ray, inv_dir, t_min, self.bound()) {
+            self.offer(Hit {
+                t: h.t,
+                prim,
+                u: h.u,
+                v: h.v,
+            });
+        }
+    }
+}
+
+/// Calls `f` with the index of each set bit of `mask`, lowest first.
+#[inline]
+pub fn for_lanes(mut mask: u8, mut f: impl FnMut(usize)) {
+    while mask != 0 {
+        f(mask.trailing_zeros() as usize);
+        mask &= mask - 1;
+    }
+}
