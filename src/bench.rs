@@ -8,7 +8,8 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::accel::Tracer;
-use crate::ray::{lane_mask, PrimKind, Ray};
+use crate::prim::PrimKind;
+use crate::ray::{lane_mask, Ray};
 use crate::scene::{Light, Scene};
 
 /// The protocol's image width; the height follows the scene's aspect ratio.

@@ -21,6 +21,7 @@ pub mod bench;
 pub mod compare;
 pub mod intersect;
 pub mod output;
+pub mod prim;
 pub mod ray;
 pub mod render;
 pub mod scene;

@@ -15,7 +15,7 @@ use cli::{
 };
 use p3trace::accel::{Accel, AccelKind, AccelOptions};
 use p3trace::accel::{BvhBuild, BvhWidth};
-use p3trace::ray::PrimKind;
+use p3trace::prim::PrimKind;
 use p3trace::render::film::OutputFormat;
 use p3trace::render::{self, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::generate::{dragon, mountain, random, skybox, sphereflake};
@@ -309,7 +309,7 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     println!(
         "# geometry {} bounded objects, {} planes, {} lights",
         scene.geometry.bounded_count(),
-        scene.geometry.count(p3trace::ray::PrimKind::Plane),
+        scene.geometry.count(p3trace::prim::PrimKind::Plane),
         scene.lights.len()
     );
     println!(

@@ -2,6 +2,7 @@
 
 use glam::Vec3;
 
+use crate::prim::PrimId;
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
 /// A ray `origin + t * dir`. `dir` is unit length wherever the renderer makes rays: the
@@ -77,64 +78,6 @@ impl RayPacket {
         let lanes = std::array::from_fn(|i| rays.get(i).copied().unwrap_or(nan));
         let active = Mask8::from_bitmask(((1u16 << rays.len()) - 1) as u8);
         (RayPacket::new(&lanes), active)
-    }
-}
-
-/// Which array of [`crate::scene::geometry::Geometry`] a primitive lives in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-#[repr(u8)]
-pub enum PrimKind {
-    Sphere = 0,
-    MovingSphere = 1,
-    Triangle = 2,
-    Box = 3,
-    Cone = 4,
-    Plane = 5,
-}
-
-impl PrimKind {
-    pub const ALL: [PrimKind; 6] = [
-        PrimKind::Sphere,
-        PrimKind::MovingSphere,
-        PrimKind::Triangle,
-        PrimKind::Box,
-        PrimKind::Cone,
-        PrimKind::Plane,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            PrimKind::Sphere => "spheres",
-            PrimKind::MovingSphere => "moving spheres",
-            PrimKind::Triangle => "triangles",
-            PrimKind::Box => "boxes",
-            PrimKind::Cone => "cones and cylinders",
-            PrimKind::Plane => "planes",
-        }
-    }
-}
-
-/// A primitive's kind and its index in that kind's arrays, packed in 32 bits so that hit
-/// records and BVH leaves stay small: the kind takes the top 3 bits.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct PrimId(u32);
-
-impl PrimId {
-    const INDEX_BITS: u32 = 29;
-    /// The largest number of primitives of one kind.
-    pub const MAX_INDEX: u32 = (1 << Self::INDEX_BITS) - 1;
-
-    pub fn new(kind: PrimKind, index: u32) -> Self {
-        debug_assert!(index <= Self::MAX_INDEX);
-        PrimId(((kind as u32) << Self::INDEX_BITS) | index)
-    }
-
-    pub fn kind(self) -> PrimKind {
-        PrimKind::ALL[(self.0 >> Self::INDEX_BITS) as usize]
-    }
-
-    pub fn index(self) -> usize {
-        (self.0 & Self::MAX_INDEX) as usize
     }
 }
 

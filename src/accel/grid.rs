@@ -11,10 +11,12 @@ use std::cell::RefCell;
 
 use glam::{IVec3, UVec3, Vec3};
 
-use super::bounds::{prim_bounds, Aabb, BOUNDED};
+use super::bounds::prim_bounds;
 use super::hit::{for_lanes, ClosestHit};
+use crate::intersect::Aabb;
 use crate::intersect::GAMMA_3;
-use crate::ray::{lane_mask, Hit, PrimId, Ray, RayPacket};
+use crate::prim::{PrimId, PrimKind};
+use crate::ray::{lane_mask, Hit, Ray, RayPacket};
 use crate::scene::Geometry;
 
 /// The report's `m`.
@@ -45,7 +47,7 @@ impl Grid {
     pub fn build(geometry: &Geometry, density: f32, mailbox: bool, shutter: [f32; 2]) -> Grid {
         let mut prims = Vec::with_capacity(geometry.bounded_count());
         let mut boxes = Vec::with_capacity(geometry.bounded_count());
-        for kind in BOUNDED {
+        for kind in PrimKind::BOUNDED {
             for prim in geometry.ids(kind) {
                 let b = prim_bounds(geometry, prim, shutter);
                 if !b.is_empty() {

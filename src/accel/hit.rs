@@ -3,7 +3,8 @@
 
 use glam::Vec3;
 
-use crate::ray::{Hit, PrimId, Ray};
+use crate::prim::PrimId;
+use crate::ray::{Hit, Ray};
 use crate::scene::Geometry;
 
 /// The closest hit found so far along a ray, with the tie rule of brute force: at equal

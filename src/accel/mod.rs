@@ -20,7 +20,8 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
-use crate::ray::{lane_mask, Hit, PrimKind, Ray};
+use crate::prim::PrimKind;
+use crate::ray::{lane_mask, Hit, Ray};
 pub use crate::scene::AccelKind;
 use crate::scene::Geometry;
 use bvh2::Bvh2;

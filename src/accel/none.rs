@@ -2,8 +2,8 @@
 
 use glam::Vec3;
 
-use super::bounds::BOUNDED;
 use super::hit::ClosestHit;
+use crate::prim::PrimKind;
 use crate::ray::Ray;
 use crate::scene::Geometry;
 
@@ -14,7 +14,7 @@ pub fn closest(
     t_min: f32,
     closest: &mut ClosestHit,
 ) {
-    for kind in BOUNDED {
+    for kind in PrimKind::BOUNDED {
         for prim in geometry.ids(kind) {
             closest.test(geometry, prim, ray, inv_dir, t_min);
         }
@@ -22,7 +22,7 @@ pub fn closest(
 }
 
 pub fn occluded(geometry: &Geometry, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> bool {
-    BOUNDED.iter().any(|&kind| {
+    PrimKind::BOUNDED.iter().any(|&kind| {
         geometry.ids(kind).any(|prim| {
             geometry
                 .intersect(prim, ray, inv_dir, t_min, t_max)

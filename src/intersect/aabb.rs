@@ -1,6 +1,7 @@
 use glam::Vec3;
 
 use super::{first_root_in, first_root_in8, GAMMA_3};
+use super::{packet_hits, packet_interval, Aabb, Shapes, TriangleHit, Vec3s};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -273,6 +274,65 @@ pub fn aabb_normal(min: Vec3, max: Vec3, p: Vec3) -> Vec3 {
         }
     }
     best.1
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Boxes {
+    pub min: Vec3s,
+    pub max: Vec3s,
+    pub material: Vec<u32>,
+}
+
+impl Shapes for Boxes {
+    fn len(&self) -> usize {
+        self.material.len()
+    }
+
+    fn material(&self, i: usize) -> u32 {
+        self.material[i]
+    }
+
+    fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {
+        Aabb {
+            min: self.min.get(i),
+            max: self.max.get(i),
+        }
+    }
+
+    fn intersect(
+        &self,
+        i: usize,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        aabb(ray, inv_dir, self.min.get(i), self.max.get(i), t_min, t_max).map(TriangleHit::at)
+    }
+
+    fn intersect_packet(
+        &self,
+        i: usize,
+        packet: &RayPacket,
+        _rays: &[Ray; 8],
+        t_min: f32,
+        t_max: &[f32; 8],
+        active: u8,
+    ) -> [Option<TriangleHit>; 8] {
+        let (lo, hi, mask) = packet_interval(t_min, t_max, active);
+        packet_hits(aabb_packet(
+            packet,
+            self.min.get(i),
+            self.max.get(i),
+            lo,
+            hi,
+            mask,
+        ))
+    }
+
+    fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {
+        aabb_normal(self.min.get(i), self.max.get(i), p)
+    }
 }
 
 #[cfg(test)]

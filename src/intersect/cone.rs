@@ -1,6 +1,6 @@
 use glam::Vec3;
 
-use super::max_num;
+use super::{max_num, packet_hits, packet_interval, Aabb, Shapes, TriangleHit, Vec3s};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -123,6 +123,94 @@ pub fn cone_normal(base: Vec3, axis: Vec3, height: f32, r_base: f32, r_apex: f32
     let perp = offset - s * axis;
     let gradient = perp - (r_base + slope * s) * slope * axis;
     gradient.try_normalize().unwrap_or(axis)
+}
+
+/// Open cones and cylinders: `base`, unit `axis`, `height`, and the radius at each end.
+#[derive(Clone, Debug, Default)]
+pub struct Cones {
+    pub base: Vec3s,
+    pub axis: Vec3s,
+    pub height: Vec<f32>,
+    pub r_base: Vec<f32>,
+    pub r_apex: Vec<f32>,
+    pub material: Vec<u32>,
+}
+
+impl Shapes for Cones {
+    fn len(&self) -> usize {
+        self.material.len()
+    }
+
+    fn material(&self, i: usize) -> u32 {
+        self.material[i]
+    }
+
+    fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {
+        let (base, axis) = (self.base.get(i), self.axis.get(i));
+        let apex = base + axis * self.height[i];
+        // A disc of radius r about `axis` reaches r * sqrt(1 - axis_k^2) along axis k.
+        let reach = (Vec3::ONE - axis * axis).max(Vec3::ZERO).powf(0.5);
+        let disc = |centre: Vec3, r: f32| Aabb {
+            min: centre - reach * r.abs(),
+            max: centre + reach * r.abs(),
+        };
+        disc(base, self.r_base[i]).union(disc(apex, self.r_apex[i]))
+    }
+
+    fn intersect(
+        &self,
+        i: usize,
+        ray: &Ray,
+        _inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        cone(
+            ray,
+            self.base.get(i),
+            self.axis.get(i),
+            self.height[i],
+            self.r_base[i],
+            self.r_apex[i],
+            t_min,
+            t_max,
+        )
+        .map(TriangleHit::at)
+    }
+
+    fn intersect_packet(
+        &self,
+        i: usize,
+        packet: &RayPacket,
+        _rays: &[Ray; 8],
+        t_min: f32,
+        t_max: &[f32; 8],
+        active: u8,
+    ) -> [Option<TriangleHit>; 8] {
+        let (lo, hi, mask) = packet_interval(t_min, t_max, active);
+        packet_hits(cone_packet(
+            packet,
+            self.base.get(i),
+            self.axis.get(i),
+            self.height[i],
+            self.r_base[i],
+            self.r_apex[i],
+            lo,
+            hi,
+            mask,
+        ))
+    }
+
+    fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {
+        cone_normal(
+            self.base.get(i),
+            self.axis.get(i),
+            self.height[i],
+            self.r_base[i],
+            self.r_apex[i],
+            p,
+        )
+    }
 }
 
 #[cfg(test)]

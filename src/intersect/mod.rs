@@ -1,4 +1,10 @@
-//! Ray-primitive intersection routines, one file per primitive.
+//! Ray-primitive intersection routines and the storage of each primitive kind, one file
+//! per kind (`moving_sphere.rs` reuses the sphere's routines).
+//!
+//! Each kind's storage is structure of arrays ([`Vec3s`] and plain `Vec`s, one array per
+//! field) and implements [`Shapes`]: count, material, bounds, the scalar and packet
+//! tests, the normal. [`crate::scene::Geometry`] holds one storage per kind of the list
+//! in [`crate::prim`] and dispatches to them.
 //!
 //! Every routine has the same contract: given a ray with a unit direction and an open
 //! interval `(t_min, t_max)`, return the smallest `t` in the interval at which the ray
@@ -15,23 +21,130 @@
 //! that misses is unspecified, and lanes outside `active` always miss.
 
 mod aabb;
+mod bounds;
 mod cone;
+mod moving_sphere;
 mod plane;
 mod sphere;
 mod triangle;
 
 pub use aabb::{
     aabb, aabb_leaf, aabb_normal, aabb_packet, slab_entry, slab_entry8, slab_entry_packet,
-    BoxPack8, FAR_WIDENING,
+    BoxPack8, Boxes, FAR_WIDENING,
 };
-pub use cone::{cone, cone_normal, cone_packet};
-pub use plane::{plane, plane_packet};
-pub use sphere::{sphere, sphere_leaf, sphere_packet, SpherePack8};
+pub use bounds::Aabb;
+pub use cone::{cone, cone_normal, cone_packet, Cones};
+pub use moving_sphere::MovingSpheres;
+pub use plane::{plane, plane_packet, Planes};
+pub use sphere::{sphere, sphere_leaf, sphere_packet, SpherePack8, Spheres};
 pub use triangle::{
-    triangle, triangle_leaf, triangle_packet, TriangleHit, TriangleHit8, TrianglePack8,
+    triangle, triangle_leaf, triangle_packet, TriangleHit, TriangleHit8, TrianglePack8, Triangles,
 };
 
+use glam::Vec3;
+
+use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8};
+
+/// The storage of one primitive kind, and what the layers above ask of a primitive `i`
+/// of it. Implemented in the kind's own file; [`crate::scene::Geometry`] dispatches to it.
+pub trait Shapes {
+    fn len(&self) -> usize;
+
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn material(&self, i: usize) -> u32;
+
+    /// The tight box, over the whole `shutter` for moving primitives; all of space for an
+    /// unbounded kind (which no structure holds).
+    fn bounds(&self, i: usize, shutter: [f32; 2]) -> Aabb;
+
+    /// The scalar test: the closest hit in `(t_min, t_max)`, with barycentrics for
+    /// triangles (zero for other kinds); `inv_dir = 1 / ray.dir`.
+    fn intersect(
+        &self,
+        i: usize,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<TriangleHit>;
+
+    /// [`Shapes::intersect`] for the lanes of `packet` (the rays `rays`) in `active`,
+    /// each within `(t_min, t_max[k])`, each lane bit for bit the scalar answer. By
+    /// default lane by lane; kinds with a packet kernel use it.
+    fn intersect_packet(
+        &self,
+        i: usize,
+        _packet: &RayPacket,
+        rays: &[Ray; 8],
+        t_min: f32,
+        t_max: &[f32; 8],
+        active: u8,
+    ) -> [Option<TriangleHit>; 8] {
+        std::array::from_fn(|k| {
+            let ray = &rays[k];
+            (active & (1 << k) != 0)
+                .then(|| self.intersect(i, ray, ray.dir.recip(), t_min, t_max[k]))
+                .flatten()
+        })
+    }
+
+    /// The outward unit normal at the hit point `p` (barycentrics `u`, `v` for
+    /// triangles; `time` for moving primitives).
+    fn normal(&self, i: usize, p: Vec3, u: f32, v: f32, time: f32) -> Vec3;
+}
+
+/// Three parallel arrays of coordinates.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Vec3s {
+    pub x: Vec<f32>,
+    pub y: Vec<f32>,
+    pub z: Vec<f32>,
+}
+
+impl Vec3s {
+    pub fn push(&mut self, v: Vec3) {
+        self.x.push(v.x);
+        self.y.push(v.y);
+        self.z.push(v.z);
+    }
+
+    pub fn get(&self, i: usize) -> Vec3 {
+        Vec3::new(self.x[i], self.y[i], self.z[i])
+    }
+
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+}
+
+/// A packet kernel's answer (hit mask, `t` lanes) as one hit per lane, `u = v = 0`.
+fn packet_hits((hit, t): (Mask8, F32x8)) -> [Option<TriangleHit>; 8] {
+    let (hit, t) = (hit.bitmask(), t.to_array());
+    std::array::from_fn(|k| {
+        (hit & (1 << k) != 0).then(|| TriangleHit {
+            t: t[k],
+            u: 0.0,
+            v: 0.0,
+        })
+    })
+}
+
+/// Packet kernel arguments from the per-lane form of [`Shapes::intersect_packet`].
+fn packet_interval(t_min: f32, t_max: &[f32; 8], active: u8) -> (F32x8, F32x8, Mask8) {
+    (
+        F32x8::splat(t_min),
+        F32x8::from_array(*t_max),
+        Mask8::from_bitmask(active),
+    )
+}
 
 /// The relative error bound of three rounded operations, `3 u / (1 - 3 u)` with `u` the
 /// unit roundoff (PBRT's `gamma(3)`): a slab distance `(bound - origin) * inv_dir` is off

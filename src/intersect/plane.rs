@@ -1,5 +1,6 @@
 use glam::Vec3;
 
+use super::{packet_hits, packet_interval, Aabb, Shapes, TriangleHit, Vec3s};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -29,6 +30,68 @@ pub fn plane_packet(
     let t = (F32x8::splat(offset) - normal.dot(rays.origin)) / denom;
     let hit = t.gt(t_min) & t.lt(t_max);
     (active.and_not(denom.eq(F32x8::ZERO)) & hit, t)
+}
+
+/// Infinite planes `dot(normal, p) = offset`.
+#[derive(Clone, Debug, Default)]
+pub struct Planes {
+    pub normal: Vec3s,
+    pub offset: Vec<f32>,
+    pub material: Vec<u32>,
+}
+
+impl Shapes for Planes {
+    fn len(&self) -> usize {
+        self.material.len()
+    }
+
+    fn material(&self, i: usize) -> u32 {
+        self.material[i]
+    }
+
+    /// All of space: planes are unbounded, and no structure holds them.
+    fn bounds(&self, _i: usize, _shutter: [f32; 2]) -> Aabb {
+        Aabb {
+            min: Vec3::NEG_INFINITY,
+            max: Vec3::INFINITY,
+        }
+    }
+
+    fn intersect(
+        &self,
+        i: usize,
+        ray: &Ray,
+        _inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        plane(ray, self.normal.get(i), self.offset[i], t_min, t_max).map(TriangleHit::at)
+    }
+
+    fn intersect_packet(
+        &self,
+        i: usize,
+        packet: &RayPacket,
+        _rays: &[Ray; 8],
+        t_min: f32,
+        t_max: &[f32; 8],
+        active: u8,
+    ) -> [Option<TriangleHit>; 8] {
+        let (lo, hi, mask) = packet_interval(t_min, t_max, active);
+        packet_hits(plane_packet(
+            packet,
+            self.normal.get(i),
+            self.offset[i],
+            lo,
+            hi,
+            mask,
+        ))
+    }
+
+    /// The geometric normal of P3F.md section 2: planes have no inside.
+    fn normal(&self, i: usize, _p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {
+        self.normal.get(i)
+    }
 }
 
 #[cfg(test)]

@@ -1,6 +1,8 @@
 use glam::Vec3;
 
 use super::{first_root_in, first_root_in8};
+use super::{packet_hits, packet_interval, Aabb, Shapes, TriangleHit, Vec3s};
+
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -115,6 +117,81 @@ fn sphere_lanes(
     let (near, far) = (ordered.select(r0, r1), ordered.select(r1, r0));
     let (hit, t) = first_root_in8(near, far, t_min, t_max);
     (hit & real, t)
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Spheres {
+    pub centre: Vec3s,
+    pub radius: Vec<f32>,
+    pub material: Vec<u32>,
+}
+
+impl Spheres {
+    /// The spheres `indices` (at most eight) side by side, for a BVH leaf.
+    pub fn pack(&self, indices: impl Iterator<Item = usize>) -> SpherePack8 {
+        let spheres: Vec<(Vec3, f32)> = indices
+            .map(|i| (self.centre.get(i), self.radius[i]))
+            .collect();
+        SpherePack8::new(&spheres)
+    }
+}
+
+/// The box of a sphere (a negative radius bounds as its magnitude).
+pub(super) fn sphere_bounds(centre: Vec3, radius: f32) -> Aabb {
+    Aabb {
+        min: centre - radius.abs(),
+        max: centre + radius.abs(),
+    }
+}
+
+impl Shapes for Spheres {
+    fn len(&self) -> usize {
+        self.radius.len()
+    }
+
+    fn material(&self, i: usize) -> u32 {
+        self.material[i]
+    }
+
+    fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {
+        sphere_bounds(self.centre.get(i), self.radius[i])
+    }
+
+    #[inline]
+    fn intersect(
+        &self,
+        i: usize,
+        ray: &Ray,
+        _inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        sphere(ray, self.centre.get(i), self.radius[i], t_min, t_max).map(TriangleHit::at)
+    }
+
+    fn intersect_packet(
+        &self,
+        i: usize,
+        packet: &RayPacket,
+        _rays: &[Ray; 8],
+        t_min: f32,
+        t_max: &[f32; 8],
+        active: u8,
+    ) -> [Option<TriangleHit>; 8] {
+        let (lo, hi, mask) = packet_interval(t_min, t_max, active);
+        packet_hits(sphere_packet(
+            packet,
+            self.centre.get(i),
+            self.radius[i],
+            lo,
+            hi,
+            mask,
+        ))
+    }
+
+    fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {
+        ((p - self.centre.get(i)) / self.radius[i]).normalize_or_zero()
+    }
 }
 
 #[cfg(test)]

@@ -1,5 +1,6 @@
 use glam::Vec3;
 
+use super::{packet_interval, Aabb, Shapes, Vec3s};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -10,6 +11,13 @@ pub struct TriangleHit {
     pub t: f32,
     pub u: f32,
     pub v: f32,
+}
+
+impl TriangleHit {
+    /// A hit at `t` with no barycentrics: the hits of the other kinds.
+    pub fn at(t: f32) -> Self {
+        TriangleHit { t, u: 0.0, v: 0.0 }
+    }
 }
 
 /// Möller-Trumbore test against the triangle `p0, p0 + e1, p0 + e2`. Two-sided; edges and
@@ -145,6 +153,142 @@ fn triangle_lanes(
     let t = e2.dot(q) * inv_det;
     hit = hit & t.gt(t_min) & t.lt(t_max);
     TriangleHit8 { hit, t, u, v }
+}
+
+/// Triangles stored as a vertex and two edges (what Möller-Trumbore reads). Degenerate
+/// triangles are stored with zero edges, which the test never hits.
+#[derive(Clone, Debug, Default)]
+pub struct Triangles {
+    pub p0: Vec3s,
+    pub e1: Vec3s,
+    pub e2: Vec3s,
+    pub material: Vec<u32>,
+    /// Index into `vertex_normals` for smooth (`pp`) triangles, `FLAT` otherwise.
+    pub shading: Vec<u32>,
+    pub vertex_normals: Vec<[Vec3; 3]>,
+}
+
+impl Triangles {
+    pub const FLAT: u32 = u32::MAX;
+
+    pub fn push(&mut self, p: [Vec3; 3], normals: Option<[Vec3; 3]>, material: u32) {
+        let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
+        let degenerate = !(e1.cross(e2).length_squared() > 0.0);
+        let (e1, e2) = if degenerate {
+            (Vec3::ZERO, Vec3::ZERO)
+        } else {
+            (e1, e2)
+        };
+        self.p0.push(p[0]);
+        self.e1.push(e1);
+        self.e2.push(e2);
+        self.material.push(material);
+        match normals {
+            Some(n) => {
+                self.shading.push(self.vertex_normals.len() as u32);
+                self.vertex_normals.push(n);
+            }
+            None => self.shading.push(Self::FLAT),
+        }
+    }
+
+    /// The triangles `indices` (at most eight) side by side, for a BVH leaf.
+    pub fn pack(&self, indices: impl Iterator<Item = usize>) -> TrianglePack8 {
+        let tris: Vec<[Vec3; 3]> = indices
+            .map(|i| [self.p0.get(i), self.e1.get(i), self.e2.get(i)])
+            .collect();
+        TrianglePack8::new(&tris)
+    }
+
+    /// Unit geometric normal `normalize(e1 x e2)`.
+    pub fn geometric_normal(&self, i: usize) -> Vec3 {
+        self.e1.get(i).cross(self.e2.get(i)).normalize_or_zero()
+    }
+}
+
+impl Shapes for Triangles {
+    fn len(&self) -> usize {
+        self.material.len()
+    }
+
+    fn material(&self, i: usize) -> u32 {
+        self.material[i]
+    }
+
+    fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {
+        let p0 = self.p0.get(i);
+        Aabb::EMPTY
+            .grow(p0)
+            .grow(p0 + self.e1.get(i))
+            .grow(p0 + self.e2.get(i))
+    }
+
+    #[inline]
+    fn intersect(
+        &self,
+        i: usize,
+        ray: &Ray,
+        _inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        triangle(
+            ray,
+            self.p0.get(i),
+            self.e1.get(i),
+            self.e2.get(i),
+            t_min,
+            t_max,
+        )
+    }
+
+    fn intersect_packet(
+        &self,
+        i: usize,
+        packet: &RayPacket,
+        _rays: &[Ray; 8],
+        t_min: f32,
+        t_max: &[f32; 8],
+        active: u8,
+    ) -> [Option<TriangleHit>; 8] {
+        let (lo, hi, mask) = packet_interval(t_min, t_max, active);
+        let h = triangle_packet(
+            packet,
+            self.p0.get(i),
+            self.e1.get(i),
+            self.e2.get(i),
+            lo,
+            hi,
+            mask,
+        );
+        let (hit, t, u, v) = (
+            h.hit.bitmask(),
+            h.t.to_array(),
+            h.u.to_array(),
+            h.v.to_array(),
+        );
+        std::array::from_fn(|k| {
+            (hit & (1 << k) != 0).then(|| TriangleHit {
+                t: t[k],
+                u: u[k],
+                v: v[k],
+            })
+        })
+    }
+
+    /// The geometric normal of P3F.md section 2 (triangles have no inside), or for smooth
+    /// triangles the vertex normals interpolated at `(u, v)`.
+    fn normal(&self, i: usize, _p: Vec3, u: f32, v: f32, _time: f32) -> Vec3 {
+        match self.shading[i] {
+            Self::FLAT => self.geometric_normal(i),
+            k => {
+                let n = self.vertex_normals[k as usize];
+                ((1.0 - u - v) * n[0] + u * n[1] + v * n[2])
+                    .try_normalize()
+                    .unwrap_or_else(|| self.geometric_normal(i))
+            }
+        }
+    }
 }
 
 #[cfg(test)]

@@ -5,8 +5,9 @@
 use glam::Vec3;
 
 use super::{BvhBuild, Node, TRAVERSAL_COST};
-use crate::accel::bounds::{prim_bounds, Aabb, BOUNDED};
-use crate::ray::PrimId;
+use crate::accel::bounds::prim_bounds;
+use crate::intersect::Aabb;
+use crate::prim::{PrimId, PrimKind};
 use crate::scene::Geometry;
 
 /// The most primitives in an SAH leaf (a leaf can later be tested 8 at a time).
@@ -37,7 +38,7 @@ pub(super) fn build(
     shutter: [f32; 2],
 ) -> (Vec<Node>, Vec<PrimId>) {
     let mut items = Vec::with_capacity(geometry.bounded_count());
-    for kind in BOUNDED {
+    for kind in PrimKind::BOUNDED {
         for prim in geometry.ids(kind) {
             let bounds = prim_bounds(geometry, prim, shutter);
             if !bounds.is_empty() {
@@ -218,7 +219,7 @@ fn sah_split(items: &mut [Item], bounds: &Aabb) -> Option<usize> {
 mod tests {
     use super::*;
     use crate::accel::bvh2::Bvh2;
-    use crate::ray::PrimKind;
+    use crate::prim::PrimKind;
 
     fn items(centroids: &[f32]) -> Vec<Item> {
         centroids

@@ -18,11 +18,12 @@ mod build;
 
 use glam::Vec3;
 
-use super::bounds::Aabb;
 use super::hit::ClosestHit;
 use super::stack::Stack;
+use crate::intersect::Aabb;
 use crate::intersect::{slab_entry, FAR_WIDENING};
-use crate::ray::{PrimId, Ray};
+use crate::prim::PrimId;
+use crate::ray::Ray;
 use crate::scene::Geometry;
 pub use build::MAX_LEAF;
 

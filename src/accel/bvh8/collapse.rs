@@ -13,8 +13,8 @@ use super::node::{
 };
 use super::Bvh8;
 use crate::accel::bvh2::{Bvh2, Node};
-use crate::intersect::{BoxPack8, SpherePack8, TrianglePack8};
-use crate::ray::{PrimId, PrimKind};
+use crate::intersect::BoxPack8;
+use crate::prim::{PrimId, PrimKind};
 use crate::scene::Geometry;
 
 impl Bvh8 {
@@ -111,25 +111,13 @@ impl Bvh8 {
         let ids = &self.prims[range];
         let mut lanes = [ids[0]; 8];
         lanes[..ids.len()].copy_from_slice(ids);
+        let indices = ids.iter().map(|id| id.index());
         if kind == PrimKind::Triangle {
-            let t = &geometry.triangles;
-            let tris: Vec<[Vec3; 3]> = ids
-                .iter()
-                .map(|id| {
-                    let i = id.index();
-                    [t.p0.get(i), t.e1.get(i), t.e2.get(i)]
-                })
-                .collect();
-            self.triangles.push(TrianglePack8::new(&tris));
+            self.triangles.push(geometry.triangles.pack(indices));
             self.triangle_ids.push(lanes);
             leaf_ref(TRIANGLES, ids.len(), self.triangles.len() - 1)
         } else {
-            let s = &geometry.spheres;
-            let spheres: Vec<(Vec3, f32)> = ids
-                .iter()
-                .map(|id| (s.centre.get(id.index()), s.radius[id.index()]))
-                .collect();
-            self.spheres.push(SpherePack8::new(&spheres));
+            self.spheres.push(geometry.spheres.pack(indices));
             self.sphere_ids.push(lanes);
             leaf_ref(SPHERES, ids.len(), self.spheres.len() - 1)
         }

@@ -17,7 +17,7 @@ mod traverse;
 
 use super::bvh2::{Bvh2, Bvh2Stats, BvhBuild};
 use crate::intersect::{SpherePack8, TrianglePack8};
-use crate::ray::PrimId;
+use crate::prim::PrimId;
 use node::{Node8, WIDTH};
 
 /// The collapsed tree: `nodes[0]` is the root; leaves index `prims` or the packs.

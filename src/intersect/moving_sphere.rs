@@ -1,0 +1,65 @@
+//! Spheres in linear motion (P3F.md 6.5): the sphere's routines at the centre of the
+//! ray's time. No packet kernel: they are rare, and tested lane by lane.
+
+use glam::Vec3;
+
+use super::sphere::{sphere, sphere_bounds};
+use super::{Aabb, Shapes, TriangleHit, Vec3s};
+use crate::ray::Ray;
+
+/// Spheres whose centre moves linearly from `centre0` at `time0` to `centre1` at `time1`.
+#[derive(Clone, Debug, Default)]
+pub struct MovingSpheres {
+    pub centre0: Vec3s,
+    pub centre1: Vec3s,
+    pub radius: Vec<f32>,
+    pub time0: Vec<f32>,
+    pub time1: Vec<f32>,
+    pub material: Vec<u32>,
+}
+
+impl MovingSpheres {
+    /// Centre of sphere `i` at `time` (P3F.md 6.5); a sphere with `time0 == time1` stands
+    /// at `centre0`.
+    pub fn centre_at(&self, i: usize, time: f32) -> Vec3 {
+        let (c0, c1) = (self.centre0.get(i), self.centre1.get(i));
+        let span = self.time1[i] - self.time0[i];
+        if span == 0.0 {
+            return c0;
+        }
+        c0 + (c1 - c0) * ((time - self.time0[i]) / span)
+    }
+}
+
+impl Shapes for MovingSpheres {
+    fn len(&self) -> usize {
+        self.radius.len()
+    }
+
+    fn material(&self, i: usize) -> u32 {
+        self.material[i]
+    }
+
+    /// The centre moves on a line, so the boxes at the shutter's two ends cover the path.
+    fn bounds(&self, i: usize, shutter: [f32; 2]) -> Aabb {
+        let r = self.radius[i];
+        sphere_bounds(self.centre_at(i, shutter[0]), r)
+            .union(sphere_bounds(self.centre_at(i, shutter[1]), r))
+    }
+
+    fn intersect(
+        &self,
+        i: usize,
+        ray: &Ray,
+        _inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        let centre = self.centre_at(i, ray.time);
+        sphere(ray, centre, self.radius[i], t_min, t_max).map(TriangleHit::at)
+    }
+
+    fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, time: f32) -> Vec3 {
+        ((p - self.centre_at(i, time)) / self.radius[i]).normalize_or_zero()
+    }
+}
