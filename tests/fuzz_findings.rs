@@ -143,3 +143,37 @@ fn the_bvh_finds_a_shadow_ray_from_1e9_away() {
         assert_eq!(difference, None, "{mode:?}");
     }
 }
+
+/// Open, found by `tests/accel.rs`'s property test on 2026-11-30 (present before that
+/// day's restructuring, which did not change it): a sliver triangle in the plane `y = 0`
+/// whose edges are parallel to within rounding (`|e1 x e2| / (|e1| |e2|)` is about 6e-8,
+/// below `f32::EPSILON`), so the reader does not store it as degenerate. Möller-Trumbore's
+/// determinant is then rounding noise, and the test reports a hit at `t = 2` where the
+/// ray is 0.09 off the plane, outside the triangle's padded box: brute force finds it, the
+/// structures, which trust the box, do not. Ignored until the triangle test or the
+/// reader's degeneracy rule is made robust to such slivers (which may change images of
+/// meshes that hold them, so it needs its own measurement).
+#[test]
+#[ignore = "open finding: near-degenerate triangles hit outside their box"]
+fn sliver_triangle_hits_only_inside_its_box() {
+    use p3trace::accel::{Accel, AccelOptions, Tracer};
+    use p3trace::ray::Ray;
+    let scene = parse_text(
+        "s 0 0 0 0\np 3\n1.5 2.1331286 -3.579876\n-2.5 -1.5 -1\n-1.5 2.9661541 0\n\
+         p 3\n-1 0 -2\n-0.5 0 -2.76472759\n0 0 -3.52945495\n",
+    )
+    .unwrap();
+    let g = &scene.geometry;
+    let ray = Ray::new(
+        Vec3::new(-1.0, -1.5, -0.5),
+        Vec3::new(0.0, 1.0, -1.0).normalize(),
+    );
+    let brute = Tracer::new(g, Accel::None).closest(&ray, 0.0, f32::INFINITY);
+    let options = AccelOptions {
+        kind: AccelKind::Bvh,
+        bvh: p3trace::accel::BvhBuild::Midpoint,
+        ..AccelOptions::default()
+    };
+    let bvh = Tracer::new(g, Accel::build(g, &options).0);
+    assert_eq!(bvh.closest(&ray, 0.0, f32::INFINITY), brute);
+}

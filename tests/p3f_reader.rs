@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use glam::Vec3;
-use p3trace::ray::PrimKind;
+use p3trace::prim::PrimKind;
 use p3trace::scene::p3f::parse_text;
 use p3trace::scene::{parse_file, AccelKind, Light, Material};
 
