@@ -367,7 +367,7 @@ fn parse_shutter(text: &str) -> Result<[f32; 2], String> {
 }
 
 fn parse_resolution(text: &str) -> Result<(u32, u32), String> {
-    let max = p3trace::scene::p3f::MAX_RESOLUTION;
+    let max = p3trace::limits::MAX_RESOLUTION;
     let (w, h) = text
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("'{text}' is not WIDTHxHEIGHT, such as 512x512"))?;

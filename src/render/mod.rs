@@ -16,6 +16,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use crate::accel::{Accel, AccelKind, AccelOptions, Tracer};
+use crate::limits::{check_image_size, MAX_SPP_SIDE};
 use crate::ray::{lane_mask, Ray};
 use crate::scene::Scene;
 use camera::Camera;
@@ -26,23 +27,6 @@ use skybox::Skybox;
 
 /// Tiles are square blocks of this many pixels a side: the unit of work of a thread.
 pub const TILE: u32 = 16;
-
-/// Largest image rendered, in pixels (6 GiB of film and tile memory).
-pub const MAX_PIXELS: u64 = 1 << 28;
-
-/// Refuses a `width` x `height` image too large to hold in memory, saying how much it
-/// would need.
-pub fn check_image_size(width: u32, height: u32) -> Result<(), String> {
-    let pixels = width as u64 * height as u64;
-    if pixels <= MAX_PIXELS {
-        return Ok(());
-    }
-    // The film and the tiles' copies hold 24 bytes a pixel.
-    Err(format!(
-        "a {width}x{height} image needs {:.1} GiB; the limit is {MAX_PIXELS} pixels",
-        (pixels * 24) as f64 / (1u64 << 30) as f64
-    ))
-}
 
 /// Where the samples of a pixel go.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,7 +53,7 @@ impl Sampling {
         match n {
             0 => Err("--spp must be at least 1".into()),
             1 => Ok(Sampling::Centre),
-            _ if k * k == n && k <= crate::scene::p3f::MAX_SPP_SIDE => Ok(Sampling::Jittered(k)),
+            _ if k * k == n && k <= MAX_SPP_SIDE => Ok(Sampling::Jittered(k)),
             _ => Err(format!(
                 "--spp {n} is not a perfect square (k x k samples per pixel, such as 4, 16 or 64)"
             )),
