@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use p3trace::generate::{mountain, sphereflake};
-use p3trace::render::shade::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
+use p3trace::render::light::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
 
 #[derive(Parser, Debug)]
 #[command(

@@ -3,6 +3,7 @@
 
 pub mod camera;
 pub mod film;
+pub mod light;
 pub mod sampler;
 pub mod shade;
 pub mod skybox;
@@ -21,8 +22,8 @@ use crate::ray::{lane_mask, Ray};
 use crate::scene::Scene;
 use camera::Camera;
 use film::Film;
-use sampler::{dim, SampleRng};
-use shade::{Sample, ShadeOptions, Shader};
+use sampler::{dim, Sample, SampleRng};
+use shade::{ShadeOptions, Shader};
 use skybox::Skybox;
 
 /// Tiles are square blocks of this many pixels a side: the unit of work of a thread.

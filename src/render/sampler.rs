@@ -63,6 +63,26 @@ impl SampleRng {
     }
 }
 
+/// The random state of one primary sample and of the rays it spawns.
+#[derive(Clone, Copy, Debug)]
+pub struct Sample {
+    /// This ray's random numbers.
+    pub rng: SampleRng,
+    /// The sample's cell `(p, q)` in the pixel's k x k grid, and k.
+    pub cell: [u32; 2],
+    pub cells: u32,
+}
+
+impl Sample {
+    /// The sample of the ray spawned along `branch` (0 reflected, 1 transmitted).
+    pub fn spawn(&self, branch: u32) -> Sample {
+        Sample {
+            rng: self.rng.spawn(branch),
+            ..*self
+        }
+    }
+}
+
 /// The finaliser of SplitMix64: a bijection on u64 with full avalanche.
 fn mix64(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
