@@ -23,7 +23,7 @@ use crate::scene::Scene;
 use camera::Camera;
 use film::Film;
 use sampler::{dim, Sample, SampleRng};
-use shade::{ShadeOptions, Shader};
+use shade::{ShadeOptions, Shader, ShadowPacket};
 use skybox::Skybox;
 
 /// Tiles are square blocks of this many pixels a side: the unit of work of a thread.
@@ -308,7 +308,7 @@ fn render_tile(
     SCRATCH.with_borrow_mut(|arena| {
         arena.reset();
         let sums = arena.alloc_slice_fill_copy((tile.width * tile.height) as usize, Vec3::ZERO);
-        let visible = arena.alloc_slice_fill_copy(shader.lights.len(), 0u8);
+        let shadows = arena.alloc_slice_fill_default(shader.lights.len());
         trace_tile(
             shader,
             options,
@@ -316,7 +316,7 @@ fn render_tile(
             k,
             &sample_ray,
             sums,
-            visible,
+            shadows,
             &mut rays,
         );
         let samples = (k * k) as f32;
@@ -334,7 +334,7 @@ fn trace_tile(
     k: u32,
     sample_ray: &dyn Fn(u32, u32, u32, u32) -> (Ray, Sample),
     sums: &mut [Vec3],
-    visible: &mut [u8],
+    shadows: &mut [ShadowPacket],
     rays: &mut u64,
 ) {
     match options.mode {
@@ -371,7 +371,7 @@ fn trace_tile(
                                 &lanes.map(|(ray, _)| ray),
                                 &lanes.map(|(_, sample)| sample),
                                 active,
-                                visible,
+                                shadows,
                                 rays,
                             );
                             for (l, colour) in colours.iter().enumerate() {
