@@ -1,5 +1,6 @@
 //! Deterministic random numbers: every value is a hash of (pixel, sample, dimension, seed),
-//! so an image does not depend on the number of threads or the order of work.
+//! so an image does not depend on the number of threads or the order of work. A ray
+//! carries its numbers, and its primary sample's cell, as a [`Sample`].
 
 use glam::{Vec2, Vec3};
 
