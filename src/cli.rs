@@ -3,8 +3,8 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use p3trace::render::shade::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
-use p3trace::scene::generate::{mountain, sphereflake};
+use p3trace::generate::{mountain, sphereflake};
+use p3trace::render::light::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -367,7 +367,7 @@ fn parse_shutter(text: &str) -> Result<[f32; 2], String> {
 }
 
 fn parse_resolution(text: &str) -> Result<(u32, u32), String> {
-    let max = p3trace::scene::p3f::MAX_RESOLUTION;
+    let max = p3trace::limits::MAX_RESOLUTION;
     let (w, h) = text
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("'{text}' is not WIDTHxHEIGHT, such as 512x512"))?;

@@ -9,6 +9,8 @@
 //!   and beside each its SIMD twins over the eight-lane types of [`simd`].
 //! - [`accel`] finds closest hits and answers occlusion queries over a scene.
 //! - [`render`] turns a scene into an image: camera, Whitted shading, skybox, tiles, film.
+//! - [`generate`] writes the project's own scenes as P3F text, and its skybox.
+//! - [`limits`] holds the sizes accepted from files and the command line.
 //! - [`compare`] measures how two images differ.
 //! - [`bench`] runs the trace-throughput protocol of `../shared/bench/PROTOCOL.md`.
 
@@ -19,7 +21,9 @@
 pub mod accel;
 pub mod bench;
 pub mod compare;
+pub mod generate;
 pub mod intersect;
+pub mod limits;
 pub mod output;
 pub mod prim;
 pub mod ray;

@@ -15,10 +15,10 @@ use cli::{
 };
 use p3trace::accel::{Accel, AccelKind, AccelOptions};
 use p3trace::accel::{BvhBuild, BvhWidth};
+use p3trace::generate::{dragon, mountain, random, skybox, sphereflake};
 use p3trace::prim::PrimKind;
 use p3trace::render::film::OutputFormat;
 use p3trace::render::{self, RenderMode, RenderOptions, Sampling};
-use p3trace::scene::generate::{dragon, mountain, random, skybox, sphereflake};
 use p3trace::scene::{self, Light, Scene};
 
 /// Why the command failed, and so which exit code it gives.

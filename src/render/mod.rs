@@ -3,6 +3,7 @@
 
 pub mod camera;
 pub mod film;
+pub mod light;
 pub mod sampler;
 pub mod shade;
 pub mod skybox;
@@ -16,33 +17,17 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use crate::accel::{Accel, AccelKind, AccelOptions, Tracer};
+use crate::limits::{check_image_size, MAX_SPP_SIDE};
 use crate::ray::{lane_mask, Ray};
 use crate::scene::Scene;
 use camera::Camera;
 use film::Film;
-use sampler::{dim, SampleRng};
-use shade::{Sample, ShadeOptions, Shader};
+use sampler::{dim, Sample, SampleRng};
+use shade::{ShadeOptions, Shader, ShadowPacket};
 use skybox::Skybox;
 
 /// Tiles are square blocks of this many pixels a side: the unit of work of a thread.
 pub const TILE: u32 = 16;
-
-/// Largest image rendered, in pixels (6 GiB of film and tile memory).
-pub const MAX_PIXELS: u64 = 1 << 28;
-
-/// Refuses a `width` x `height` image too large to hold in memory, saying how much it
-/// would need.
-pub fn check_image_size(width: u32, height: u32) -> Result<(), String> {
-    let pixels = width as u64 * height as u64;
-    if pixels <= MAX_PIXELS {
-        return Ok(());
-    }
-    // The film and the tiles' copies hold 24 bytes a pixel.
-    Err(format!(
-        "a {width}x{height} image needs {:.1} GiB; the limit is {MAX_PIXELS} pixels",
-        (pixels * 24) as f64 / (1u64 << 30) as f64
-    ))
-}
 
 /// Where the samples of a pixel go.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,7 +54,7 @@ impl Sampling {
         match n {
             0 => Err("--spp must be at least 1".into()),
             1 => Ok(Sampling::Centre),
-            _ if k * k == n && k <= crate::scene::p3f::MAX_SPP_SIDE => Ok(Sampling::Jittered(k)),
+            _ if k * k == n && k <= MAX_SPP_SIDE => Ok(Sampling::Jittered(k)),
             _ => Err(format!(
                 "--spp {n} is not a perfect square (k x k samples per pixel, such as 4, 16 or 64)"
             )),
@@ -323,7 +308,7 @@ fn render_tile(
     SCRATCH.with_borrow_mut(|arena| {
         arena.reset();
         let sums = arena.alloc_slice_fill_copy((tile.width * tile.height) as usize, Vec3::ZERO);
-        let visible = arena.alloc_slice_fill_copy(shader.lights.len(), 0u8);
+        let shadows = arena.alloc_slice_fill_default(shader.lights.len());
         trace_tile(
             shader,
             options,
@@ -331,7 +316,7 @@ fn render_tile(
             k,
             &sample_ray,
             sums,
-            visible,
+            shadows,
             &mut rays,
         );
         let samples = (k * k) as f32;
@@ -349,7 +334,7 @@ fn trace_tile(
     k: u32,
     sample_ray: &dyn Fn(u32, u32, u32, u32) -> (Ray, Sample),
     sums: &mut [Vec3],
-    visible: &mut [u8],
+    shadows: &mut [ShadowPacket],
     rays: &mut u64,
 ) {
     match options.mode {
@@ -386,7 +371,7 @@ fn trace_tile(
                                 &lanes.map(|(ray, _)| ray),
                                 &lanes.map(|(_, sample)| sample),
                                 active,
-                                visible,
+                                shadows,
                                 rays,
                             );
                             for (l, colour) in colours.iter().enumerate() {

@@ -1,5 +1,6 @@
 //! Deterministic random numbers: every value is a hash of (pixel, sample, dimension, seed),
-//! so an image does not depend on the number of threads or the order of work.
+//! so an image does not depend on the number of threads or the order of work. A ray
+//! carries its numbers, and its primary sample's cell, as a [`Sample`].
 
 use glam::{Vec2, Vec3};
 
@@ -60,6 +61,26 @@ impl SampleRng {
         let r = self.uniform(du).sqrt();
         let (s, c) = (std::f32::consts::TAU * self.uniform(dv)).sin_cos();
         Vec2::new(r * c, r * s)
+    }
+}
+
+/// The random state of one primary sample and of the rays it spawns.
+#[derive(Clone, Copy, Debug)]
+pub struct Sample {
+    /// This ray's random numbers.
+    pub rng: SampleRng,
+    /// The sample's cell `(p, q)` in the pixel's k x k grid, and k.
+    pub cell: [u32; 2],
+    pub cells: u32,
+}
+
+impl Sample {
+    /// The sample of the ray spawned along `branch` (0 reflected, 1 transmitted).
+    pub fn spawn(&self, branch: u32) -> Sample {
+        Sample {
+            rng: self.rng.spawn(branch),
+            ..*self
+        }
     }
 }
 

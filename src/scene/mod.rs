@@ -1,7 +1,6 @@
 //! The scene model: geometry in structure-of-arrays form, materials, lights and camera,
 //! read from P3F files by [`p3f`].
 
-pub mod generate;
 pub mod geometry;
 pub mod p3f;
 pub mod ply;

@@ -9,11 +9,8 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::{AccelKind, CameraSpec, Light, Material, Scene, Warning};
+use crate::limits::{check_image_size, MAX_RESOLUTION, MAX_SPP_SIDE};
 
-/// Largest `spp k` accepted: k x k samples per pixel.
-pub const MAX_SPP_SIDE: u32 = 1024;
-/// Largest image side accepted from a file or the command line.
-pub const MAX_RESOLUTION: u32 = 1 << 16;
 /// Largest magnitude of a number in a scene. The intersection routines multiply up to four
 /// coordinates together (1e36 at most here, within `f32`); beyond it they overflow, and
 /// the structures' boxes with them.
@@ -590,7 +587,7 @@ impl<'a> Parser<'a> {
                 "resolution" => {
                     cam.width = self.resolution("the image width")?;
                     cam.height = self.resolution("the image height")?;
-                    if let Err(message) = crate::render::check_image_size(cam.width, cam.height) {
+                    if let Err(message) = check_image_size(cam.width, cam.height) {
                         return Err(self.error_token(key, message));
                     }
                 }

@@ -1,6 +1,12 @@
 //! A procedural skybox for the project's scenes: a sky gradient from a pale horizon to a
 //! deep zenith, a small sun with a glow, and a darker sea below the horizon, written as
 //! the six faces that `env` reads (P3F.md section 10).
+//!
+//! The faces come from the renderer's own definitions, so that they read back as the sky
+//! they were made from: each texel's direction is `render::skybox::Face::direction` (the
+//! lookup's mapping run backwards), and its bytes come from `render::film::to_byte`, the
+//! conversion every rendered image goes through. `generate` sits above `render`, so this
+//! is no cycle.
 
 use std::path::Path;
 

@@ -4,6 +4,9 @@
 //!
 //! Every generator writes P3F text, so what it makes is exactly what `p3trace render`
 //! reads back, and the files in `scenes/` can be checked against their generator.
+//!
+//! Generators sit above [`crate::scene`] and [`crate::render`], whose formats they write;
+//! nothing in the library below them depends on them.
 
 pub mod dragon;
 pub mod mountain;
