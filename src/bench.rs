@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use crate::accel::Tracer;
 use crate::prim::PrimKind;
-use crate::ray::{lane_mask, Ray};
+use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::scene::{Light, Scene};
 
 /// The protocol's image width; the height follows the scene's aspect ratio.
@@ -328,13 +328,14 @@ fn trace_packet(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> [f32; 8] {
     // Idle lanes carry a copy of the first ray and are masked off.
     let lane = |k: usize| if block[k] == IDLE { block[0] } else { block[k] } as usize;
     let rays = std::array::from_fn(|k| set.rays[lane(k)]);
+    let packet = RayPacket::new(&rays)
+        .with_t_max(std::array::from_fn(|k| set.t_max[lane(k)]))
+        .with_active(active);
     if set.occlusion {
-        let t_max = std::array::from_fn(|k| set.t_max[lane(k)]);
-        let blocked = tracer.occluded_packet(&rays, &t_max, active);
+        let blocked = tracer.occluded_packet(&packet);
         std::array::from_fn(|k| if blocked & (1 << k) != 0 { 0.0 } else { -1.0 })
     } else {
-        // Closest-hit sets have one `t_max` for every ray.
-        let hits = tracer.closest_packet(&rays, active, set.t_max[lane(0)]);
+        let hits = tracer.closest_packet(&packet);
         hits.map(|h| h.map_or(-1.0, |h| h.t))
     }
 }

@@ -70,28 +70,33 @@ prim_kinds!(define_prim_kind);
 
 impl PrimKind {
     /// The kinds that acceleration structures hold, in [`PrimId`] order.
-    pub const BOUNDED: [PrimKind; Self::bounded_count()] = {
-        let mut kinds = [PrimKind::Sphere; Self::bounded_count()];
+    pub const BOUNDED: [PrimKind; Self::count_where(true)] = Self::select(true);
+    /// The kinds that `Tracer` tests apart from the structure, in [`PrimId`] order.
+    pub const UNBOUNDED: [PrimKind; Self::count_where(false)] = Self::select(false);
+
+    const fn count_where(bounded: bool) -> usize {
+        let (mut i, mut n) = (0, 0);
+        while i < Self::ALL.len() {
+            if Self::ALL[i].is_bounded() == bounded {
+                n += 1;
+            }
+            i += 1;
+        }
+        n
+    }
+
+    /// The kinds whose `is_bounded` is `bounded`, in order (`N` of them).
+    const fn select<const N: usize>(bounded: bool) -> [PrimKind; N] {
+        let mut kinds = [PrimKind::Sphere; N];
         let (mut i, mut k) = (0, 0);
         while i < Self::ALL.len() {
-            if Self::ALL[i].is_bounded() {
+            if Self::ALL[i].is_bounded() == bounded {
                 kinds[k] = Self::ALL[i];
                 k += 1;
             }
             i += 1;
         }
         kinds
-    };
-
-    const fn bounded_count() -> usize {
-        let (mut i, mut n) = (0, 0);
-        while i < Self::ALL.len() {
-            if Self::ALL[i].is_bounded() {
-                n += 1;
-            }
-            i += 1;
-        }
-        n
     }
 }
 
@@ -134,6 +139,7 @@ mod tests {
         }
         let bounded = PrimKind::BOUNDED.len();
         assert!(PrimKind::ALL[..bounded] == PrimKind::BOUNDED);
-        assert!(PrimKind::ALL[bounded..].iter().all(|k| !k.is_bounded()));
+        assert!(PrimKind::ALL[bounded..] == PrimKind::UNBOUNDED);
+        assert!(PrimKind::UNBOUNDED.iter().all(|k| !k.is_bounded()));
     }
 }

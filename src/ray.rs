@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use crate::prim::PrimId;
-use crate::simd::{F32x8, Mask8, Vec3x8};
+use crate::simd::{F32x8, Vec3x8};
 
 /// A ray `origin + t * dir`. `dir` is unit length wherever the renderer makes rays: the
 /// intersection routines rely on it (the sphere test skips the `dot(d, d)` term).
@@ -35,15 +35,23 @@ impl Ray {
     }
 }
 
-/// Eight rays as structure of arrays, for the packet kernels of [`crate::intersect`]:
-/// lane `i` is ray `i`. `inv_dir = 1 / dir` is computed once, as the scalar callers do
-/// with `ray.dir.recip()`, so the slab tests see the same bits.
+/// Eight rays traced together (Embree's `RayK`), the one packet type of every layer: the
+/// rays themselves (borrowed, for lanes that go on alone), the same rays as structure of arrays
+/// for the packet kernels of [`crate::intersect`] (lane `i` is ray `i`), each lane's
+/// interval `(t_min, t_max[i])`, and the lanes that are asked (`active`, bit `i` for
+/// lane `i`). `inv_dir = 1 / dir` is computed once, as the scalar callers do with
+/// `ray.dir.recip()`, so the slab tests see the same bits.
 #[derive(Clone, Copy, Debug)]
-pub struct RayPacket {
+pub struct RayPacket<'r> {
+    pub rays: &'r [Ray; 8],
     pub origin: Vec3x8,
     pub dir: Vec3x8,
     pub inv_dir: Vec3x8,
     pub time: F32x8,
+    /// One lower end for every lane: queries start at the origin.
+    pub t_min: f32,
+    pub t_max: [f32; 8],
+    pub active: u8,
 }
 
 /// The bit mask of the lanes `0..8` for which `pred` holds.
@@ -51,33 +59,35 @@ pub fn lane_mask(mut pred: impl FnMut(usize) -> bool) -> u8 {
     (0..8).filter(|&k| pred(k)).fold(0, |mask, k| mask | 1 << k)
 }
 
-impl RayPacket {
-    /// Each lane's `1 / dir`, as the single-ray routines take it.
-    pub fn inv_dir_lanes(&self) -> [Vec3; 8] {
-        std::array::from_fn(|k| self.inv_dir.lane(k))
-    }
-
-    pub fn new(rays: &[Ray; 8]) -> Self {
+impl<'r> RayPacket<'r> {
+    /// The eight rays, every lane active over `(0, inf)`.
+    pub fn new(rays: &'r [Ray; 8]) -> Self {
         let dir = Vec3x8::from_lanes(rays.map(|r| r.dir));
         RayPacket {
+            rays,
             origin: Vec3x8::from_lanes(rays.map(|r| r.origin)),
             dir,
             inv_dir: dir.recip(),
             time: F32x8::from_array(rays.map(|r| r.time)),
+            t_min: 0.0,
+            t_max: [f32::INFINITY; 8],
+            active: 0xFF,
         }
     }
 
-    /// Up to eight rays; the lanes past `rays.len()` hold NaN rays and are left out of
-    /// the returned active mask, so a short tail needs no scalar loop.
-    ///
-    /// # Panics
-    /// If `rays` holds more than eight rays.
-    pub fn from_slice(rays: &[Ray]) -> (Self, Mask8) {
-        assert!(rays.len() <= 8, "a packet holds at most 8 rays");
-        let nan = Ray::new(Vec3::NAN, Vec3::NAN);
-        let lanes = std::array::from_fn(|i| rays.get(i).copied().unwrap_or(nan));
-        let active = Mask8::from_bitmask(((1u16 << rays.len()) - 1) as u8);
-        (RayPacket::new(&lanes), active)
+    /// The packet with only the lanes `active` asked.
+    pub fn with_active(self, active: u8) -> Self {
+        RayPacket { active, ..self }
+    }
+
+    /// The packet with lane `i` asked within `(t_min, t_max[i])`.
+    pub fn with_t_max(self, t_max: [f32; 8]) -> Self {
+        RayPacket { t_max, ..self }
+    }
+
+    /// Each lane's `1 / dir`, as the single-ray routines take it.
+    pub fn inv_dir_lanes(&self) -> [Vec3; 8] {
+        std::array::from_fn(|k| self.inv_dir.lane(k))
     }
 }
 

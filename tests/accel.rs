@@ -6,7 +6,7 @@ mod common;
 use glam::Vec3;
 use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
 use p3trace::accel::{BvhBuild, BvhWidth};
-use p3trace::ray::Ray;
+use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::{render, RenderOptions};
 use p3trace::scene::p3f::parse_text;
 use p3trace::scene::{parse_file, Scene};
@@ -222,11 +222,12 @@ proptest! {
             let name = accel.name();
             let tracer = Tracer::new(g, accel);
             for (rays, active, t_max) in &packets {
-                let hits = tracer.closest_packet(rays, *active, t_max[0]);
-                let blocked = tracer.occluded_packet(rays, t_max, *active);
+                let packet = RayPacket::new(rays).with_t_max(*t_max).with_active(*active);
+                let hits = tracer.closest_packet(&packet);
+                let blocked = tracer.occluded_packet(&packet);
                 for k in 0..8 {
                     let on = active & (1 << k) != 0;
-                    let expected = if on { brute.closest(&rays[k], 0.0, t_max[0]) } else { None };
+                    let expected = if on { brute.closest(&rays[k], 0.0, t_max[k]) } else { None };
                     prop_assert_eq!(hits[k], expected, "{} lane {} closest, {:?}", name, k, rays[k]);
                     let expected = on && brute.occluded(&rays[k], 0.0, t_max[k]);
                     prop_assert_eq!(

@@ -49,7 +49,7 @@ fn moving_sphere_leaving_the_floats_is_refused() {
 fn ray_along_a_box_face_hits_nothing_beside_it() {
     use p3trace::accel::{Accel, AccelOptions, Tracer};
     use p3trace::accel::{BvhBuild, BvhWidth};
-    use p3trace::ray::Ray;
+    use p3trace::ray::{Ray, RayPacket};
     let scene = parse_text("box 1 0 9.770531e-38 1e9 -1e9 -1e9").unwrap();
     let g = &scene.geometry;
     let ray = Ray::new(
@@ -75,12 +75,12 @@ fn ray_along_a_box_face_hits_nothing_beside_it() {
         let name = tracer.accel.name();
         assert_eq!(tracer.closest(&ray, 0.0, f32::INFINITY), None, "{name}");
         assert_eq!(
-            tracer.closest_packet(&[ray; 8], 0xFF, f32::INFINITY),
+            tracer.closest_packet(&RayPacket::new(&[ray; 8])),
             [None; 8],
             "{name}"
         );
         assert_eq!(
-            tracer.occluded_packet(&[ray; 8], &[f32::INFINITY; 8], 0xFF),
+            tracer.occluded_packet(&RayPacket::new(&[ray; 8])),
             0,
             "{name}"
         );

@@ -218,7 +218,7 @@ impl Grid {
         }
     }
 
-    /// The closest hits of the rays of `rays` in `active`, as [`Grid::closest`] finds
+    /// The closest hits of the active lanes of `packet`, as [`Grid::closest`] finds
     /// each. Each lane walks its own 3D-DDA; at every step the lanes that stand in the
     /// same cell test its objects together, by the primitives' packet kernels (so a
     /// coherent packet tests each object once for all its rays). Mailboxing plays no
@@ -226,15 +226,13 @@ impl Grid {
     pub fn closest_packet(
         &self,
         geometry: &Geometry,
-        rays: &[Ray; 8],
-        active: u8,
-        t_min: f32,
+        packet: &RayPacket,
         closest: &mut [ClosestHit; 8],
     ) {
-        let packet = RayPacket::new(rays);
+        let (rays, t_min) = (packet.rays, packet.t_min);
         let packet_inv_dir = packet.inv_dir_lanes();
         let limits = closest.each_ref().map(|c| c.limit());
-        let mut walks = self.start_walks(rays, &packet_inv_dir, active, t_min, &limits);
+        let mut walks = self.start_walks(packet, &packet_inv_dir, &limits);
         loop {
             let walking = lanes_of(&walks, |_| true);
             if walking == 0 {
@@ -255,7 +253,7 @@ impl Grid {
                 let mut t_max = closest.each_ref().map(|c| c.bound());
                 for &r in self.cell_refs(cell) {
                     let prim = self.prims[r as usize];
-                    let hits = geometry.intersect_packet(prim, &packet, rays, t_min, &t_max, lanes);
+                    let hits = geometry.intersect_packet(prim, packet, &t_max, lanes);
                     for (k, hit) in hits.into_iter().enumerate() {
                         if let Some(h) = hit {
                             let (t, u, v) = (h.t, h.u, h.v);
@@ -277,19 +275,12 @@ impl Grid {
         }
     }
 
-    /// The lanes of `active` whose ray is blocked within `(t_min, t_max[k])`, walked as
+    /// The active lanes of `packet` whose ray is blocked within its interval, walked as
     /// in [`Grid::closest_packet`].
-    pub fn occluded_packet(
-        &self,
-        geometry: &Geometry,
-        rays: &[Ray; 8],
-        active: u8,
-        t_min: f32,
-        t_max: &[f32; 8],
-    ) -> u8 {
-        let packet = RayPacket::new(rays);
+    pub fn occluded_packet(&self, geometry: &Geometry, packet: &RayPacket) -> u8 {
+        let (rays, t_min, t_max) = (packet.rays, packet.t_min, &packet.t_max);
         let packet_inv_dir = packet.inv_dir_lanes();
-        let mut walks = self.start_walks(rays, &packet_inv_dir, active, t_min, t_max);
+        let mut walks = self.start_walks(packet, &packet_inv_dir, t_max);
         let mut blocked = 0u8;
         loop {
             let walking = lanes_of(&walks, |_| true) & !blocked;
@@ -318,7 +309,7 @@ impl Grid {
                         break;
                     }
                     let prim = self.prims[r as usize];
-                    let hits = geometry.intersect_packet(prim, &packet, rays, t_min, t_max, open);
+                    let hits = geometry.intersect_packet(prim, packet, t_max, open);
                     for (k, hit) in hits.iter().enumerate() {
                         if hit.is_some() {
                             blocked |= 1 << k;
@@ -334,18 +325,17 @@ impl Grid {
         }
     }
 
-    /// The walks of the lanes of `active` within `(t_min, t_max[k])`, each in its first
-    /// cell with objects (`None` for the others, and where there is no such cell).
+    /// The walks of the active lanes of `packet` within `(t_min, t_max[k])`, each in its
+    /// first cell with objects (`None` for the others, and where there is no such cell).
     fn start_walks(
         &self,
-        rays: &[Ray; 8],
+        packet: &RayPacket,
         inv_dir: &[Vec3; 8],
-        active: u8,
-        t_min: f32,
         t_max: &[f32; 8],
     ) -> [Option<Dda>; 8] {
+        let (rays, t_min) = (packet.rays, packet.t_min);
         std::array::from_fn(|k| {
-            (active & (1 << k) != 0)
+            (packet.active & (1 << k) != 0)
                 .then(|| Dda::start(self, &rays[k], inv_dir[k], t_min, t_max[k]))
                 .flatten()
                 .and_then(|dda| self.skip_empty(dda))

@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 
 use crate::prim::PrimKind;
-use crate::ray::{lane_mask, Hit, Ray};
+use crate::ray::{lane_mask, Hit, Ray, RayPacket};
 pub use crate::scene::AccelKind;
 use crate::scene::Geometry;
 use bvh2::Bvh2;
@@ -202,20 +202,24 @@ impl<'s> Tracer<'s> {
             }
     }
 
-    /// The closest hit of each ray of `rays` whose bit is set in `active`, with `t` in
-    /// `(0, t_max)`; `None` for the other lanes. The same hits as [`Tracer::closest`]
-    /// gives each ray; the 8-wide BVH and the grid trace them as one packet.
-    pub fn closest_packet(&self, rays: &[Ray; 8], active: u8, t_max: f32) -> [Option<Hit>; 8] {
-        let active = active & traceable(rays);
-        let mut closest = [ClosestHit::new(t_max); 8];
+    /// The closest hit of each active lane of `packet` within its interval; `None` for
+    /// the other lanes. The same hits as [`Tracer::closest`] gives each ray; the 8-wide
+    /// BVH and the grid trace them as one packet.
+    pub fn closest_packet(&self, packet: &RayPacket) -> [Option<Hit>; 8] {
+        let active = packet.active & traceable(packet.rays);
+        if active != packet.active {
+            return self.closest_packet(&packet.with_active(active));
+        }
+        let mut closest = packet.t_max.map(ClosestHit::new);
         let g = self.geometry;
+        let (rays, t_min, t_max) = (packet.rays, packet.t_min, &packet.t_max);
         match &self.accel {
-            Accel::Bvh8(bvh) => bvh.closest_packet(g, rays, active, 0.0, &mut closest),
-            Accel::Grid(grid) => grid.closest_packet(g, rays, active, 0.0, &mut closest),
+            Accel::Bvh8(bvh) => bvh.closest_packet(g, packet, &mut closest),
+            Accel::Grid(grid) => grid.closest_packet(g, packet, &mut closest),
             Accel::None | Accel::Bvh2(_) => {
                 return std::array::from_fn(|k| {
                     (active & (1 << k) != 0)
-                        .then(|| self.closest(&rays[k], 0.0, t_max))
+                        .then(|| self.closest(&rays[k], t_min, t_max[k]))
                         .flatten()
                 })
             }
@@ -223,38 +227,42 @@ impl<'s> Tracer<'s> {
         std::array::from_fn(|k| {
             let ray = &rays[k];
             (active & (1 << k) != 0)
-                .then(|| self.nearer_plane(ray, ray.dir.recip(), 0.0, t_max, closest[k].hit))
+                .then(|| self.nearer_plane(ray, ray.dir.recip(), t_min, t_max[k], closest[k].hit))
                 .flatten()
         })
     }
 
-    /// The lanes of `active` whose ray is blocked within `(0, t_max[k])`, as a bit mask:
-    /// the answers of [`Tracer::occluded`], traced as one packet by the 8-wide BVH and
-    /// the grid.
-    pub fn occluded_packet(&self, rays: &[Ray; 8], t_max: &[f32; 8], active: u8) -> u8 {
-        let active = active & traceable(rays);
+    /// The active lanes of `packet` whose ray is blocked within its interval, as a bit
+    /// mask: the answers of [`Tracer::occluded`], traced as one packet by the 8-wide BVH
+    /// and the grid.
+    pub fn occluded_packet(&self, packet: &RayPacket) -> u8 {
+        let (rays, t_min, t_max) = (packet.rays, packet.t_min, &packet.t_max);
+        let active = packet.active & traceable(rays);
         let by_plane = lane_mask(|k| {
             active & (1 << k) != 0
                 && self
-                    .closest_plane(&rays[k], rays[k].dir.recip(), 0.0, t_max[k])
+                    .closest_plane(&rays[k], rays[k].dir.recip(), t_min, t_max[k])
                     .is_some()
         });
-        let rest = active & !by_plane;
+        let rest = packet.with_active(active & !by_plane);
         let g = self.geometry;
         let blocked = match &self.accel {
-            Accel::Bvh8(bvh) => bvh.occluded_packet(g, rays, rest, 0.0, t_max),
-            Accel::Grid(grid) => grid.occluded_packet(g, rays, rest, 0.0, t_max),
-            Accel::None | Accel::Bvh2(_) => {
-                lane_mask(|k| rest & (1 << k) != 0 && self.occluded(&rays[k], 0.0, t_max[k]))
-            }
+            Accel::Bvh8(bvh) => bvh.occluded_packet(g, &rest),
+            Accel::Grid(grid) => grid.occluded_packet(g, &rest),
+            Accel::None | Accel::Bvh2(_) => lane_mask(|k| {
+                rest.active & (1 << k) != 0 && self.occluded(&rays[k], t_min, t_max[k])
+            }),
         };
         by_plane | blocked
     }
 
+    /// The closest hit among the unbounded primitives (planes), which no structure holds.
     fn closest_plane(&self, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
         let mut closest = ClosestHit::new(t_max);
-        for prim in self.geometry.ids(PrimKind::Plane) {
-            closest.test(self.geometry, prim, ray, inv_dir, t_min);
+        for kind in PrimKind::UNBOUNDED {
+            for prim in self.geometry.ids(kind) {
+                closest.test(self.geometry, prim, ray, inv_dir, t_min);
+            }
         }
         closest.hit
     }

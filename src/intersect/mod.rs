@@ -72,22 +72,21 @@ pub trait Shapes {
         t_max: f32,
     ) -> Option<TriangleHit>;
 
-    /// [`Shapes::intersect`] for the lanes of `packet` (the rays `rays`) in `active`,
-    /// each within `(t_min, t_max[k])`, each lane bit for bit the scalar answer. By
-    /// default lane by lane; kinds with a packet kernel use it.
+    /// [`Shapes::intersect`] for the lanes `active` of `packet`, each within
+    /// `(packet.t_min, t_max[k])` (the packet's own bounds, or tighter ones a traversal
+    /// keeps), each lane bit for bit the scalar answer. By default lane by lane; kinds
+    /// with a packet kernel use it.
     fn intersect_packet(
         &self,
         i: usize,
-        _packet: &RayPacket,
-        rays: &[Ray; 8],
-        t_min: f32,
+        packet: &RayPacket,
         t_max: &[f32; 8],
         active: u8,
     ) -> [Option<TriangleHit>; 8] {
         std::array::from_fn(|k| {
-            let ray = &rays[k];
+            let ray = &packet.rays[k];
             (active & (1 << k) != 0)
-                .then(|| self.intersect(i, ray, ray.dir.recip(), t_min, t_max[k]))
+                .then(|| self.intersect(i, ray, ray.dir.recip(), packet.t_min, t_max[k]))
                 .flatten()
         })
     }

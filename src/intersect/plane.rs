@@ -72,12 +72,10 @@ impl Shapes for Planes {
         &self,
         i: usize,
         packet: &RayPacket,
-        _rays: &[Ray; 8],
-        t_min: f32,
         t_max: &[f32; 8],
         active: u8,
     ) -> [Option<TriangleHit>; 8] {
-        let (lo, hi, mask) = packet_interval(t_min, t_max, active);
+        let (lo, hi, mask) = packet_interval(packet.t_min, t_max, active);
         packet_hits(plane_packet(
             packet,
             self.normal.get(i),

@@ -18,7 +18,7 @@ use rayon::prelude::*;
 
 use crate::accel::{Accel, AccelKind, AccelOptions, Tracer};
 use crate::limits::{check_image_size, MAX_SPP_SIDE};
-use crate::ray::{lane_mask, Ray};
+use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::scene::Scene;
 use camera::Camera;
 use film::Film;
@@ -367,10 +367,11 @@ fn trace_tile(
                                 let (x, y) = lane_pixel(l as u32).unwrap_or((bx, by));
                                 sample_ray(tile.x + x, tile.y + y, p, q)
                             });
+                            let primary_rays = lanes.map(|(ray, _)| ray);
+                            let primary = RayPacket::new(&primary_rays).with_active(active);
                             let colours = shader.trace_packet(
-                                &lanes.map(|(ray, _)| ray),
+                                &primary,
                                 &lanes.map(|(_, sample)| sample),
-                                active,
                                 shadows,
                                 rays,
                             );

@@ -9,7 +9,7 @@ use super::light::{emitters, Emitter, DEFAULT_LIGHT_GRID};
 use super::sampler::{dim, Sample, SampleRng};
 use super::skybox::Skybox;
 use crate::accel::Tracer;
-use crate::ray::{lane_mask, Hit, Ray};
+use crate::ray::{lane_mask, Hit, Ray, RayPacket};
 use crate::scene::{Material, Scene};
 
 /// Offset of secondary ray origins along the normal against self-intersection, in scene
@@ -124,38 +124,39 @@ impl<'a> Shader<'a> {
     /// packets save.
     pub fn trace_packet(
         &self,
-        packet: &[Ray; 8],
+        packet: &RayPacket,
         samples: &[Sample; 8],
-        active: u8,
         shadows: &mut [ShadowPacket],
         rays: &mut u64,
     ) -> [Vec3; 8] {
+        let active = packet.active;
         *rays += u64::from(active.count_ones());
-        let hits = self.tracer.closest_packet(packet, active, f32::INFINITY);
+        let hits = self.tracer.closest_packet(packet);
+        let primary = &packet.rays;
         let surfaces: [Option<Surface>; 8] =
-            std::array::from_fn(|k| hits[k].map(|hit| self.surface(&packet[k], &hit)));
+            std::array::from_fn(|k| hits[k].map(|hit| self.surface(&primary[k], &hit)));
         // Every lane's shadow ray to light `index`, traced as one packet and kept for the
         // lanes' shading.
         let shadows = &mut shadows[..self.lights.len()];
         for (index, light_shadows) in shadows.iter_mut().enumerate() {
             let lanes: [Option<ShadowRay>; 8] = std::array::from_fn(|k| {
                 let surface = surfaces[k].as_ref()?;
-                self.shadow_ray(index, &samples[k], surface, packet[k].time)
+                self.shadow_ray(index, &samples[k], surface, primary[k].time)
             });
             // Lanes without a shadow ray stay out of the query's mask: any ray fills them.
             let unused = Ray::new(Vec3::ZERO, Vec3::Z);
-            let blocked = self.tracer.occluded_packet(
-                &lanes.map(|shadow| shadow.map_or(unused, |shadow| shadow.ray)),
-                &lanes.map(|shadow| shadow.map_or(0.0, |shadow| shadow.distance)),
-                lane_mask(|k| lanes[k].is_some()),
-            );
+            let shadow_rays = lanes.map(|shadow| shadow.map_or(unused, |shadow| shadow.ray));
+            let shadow_packet = RayPacket::new(&shadow_rays)
+                .with_t_max(lanes.map(|shadow| shadow.map_or(0.0, |shadow| shadow.distance)))
+                .with_active(lane_mask(|k| lanes[k].is_some()));
+            let blocked = self.tracer.occluded_packet(&shadow_packet);
             *light_shadows = ShadowPacket { lanes, blocked };
         }
         std::array::from_fn(|k| {
             if active & (1 << k) == 0 {
                 return Vec3::ZERO;
             }
-            let ray = &packet[k];
+            let ray = &primary[k];
             let Some((hit, surface)) = hits[k].zip(surfaces[k]) else {
                 return self.background(ray.dir);
             };

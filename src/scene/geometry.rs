@@ -58,23 +58,19 @@ macro_rules! define_geometry {
                 }
             }
 
-            /// [`Geometry::intersect`] for the rays of `packet` (lanes of `rays`) in
-            /// `active`, each within `(t_min, t_max[k])`, by the kind's packet kernel:
-            /// each lane's answer is bit for bit the scalar one.
+            /// [`Geometry::intersect`] for the lanes `active` of `packet`, each within
+            /// `(packet.t_min, t_max[k])`, by the kind's packet kernel: each lane's answer
+            /// is bit for bit the scalar one.
             pub fn intersect_packet(
                 &self,
                 prim: PrimId,
                 packet: &RayPacket,
-                rays: &[Ray; 8],
-                t_min: f32,
                 t_max: &[f32; 8],
                 active: u8,
             ) -> [Option<TriangleHit>; 8] {
                 let i = prim.index();
                 match prim.kind() {
-                    $(PrimKind::$kind => {
-                        self.$field.intersect_packet(i, packet, rays, t_min, t_max, active)
-                    })*
+                    $(PrimKind::$kind => self.$field.intersect_packet(i, packet, t_max, active),)*
                 }
             }
 

@@ -7,7 +7,7 @@ use super::{Bvh8, STACK_SIZE};
 use crate::accel::hit::{for_lanes, ClosestHit};
 use crate::accel::stack::Stack;
 use crate::intersect::{slab_entry_packet, FAR_WIDENING};
-use crate::ray::{Ray, RayPacket};
+use crate::ray::RayPacket;
 use crate::scene::Geometry;
 use crate::simd::{F32x8, Mask8};
 
@@ -15,8 +15,7 @@ use crate::simd::{F32x8, Mask8};
 const SINGLE_RAY_LANES: u32 = 2;
 
 impl Bvh8 {
-    /// The closest hits of the rays of `rays` whose bit is set in `active`, traced
-    /// together: each node's children are tested against all the packet's rays at once,
+    /// The closest hits of the active lanes of `packet`, traced together: each node's children are tested against all the packet's rays at once,
     /// visited nearest first (by the nearest lane's entry) with their lanes and that
     /// entry on the stack. An entry is skipped when it lies beyond every lane's closest
     /// hit; a subtree left with few lanes is finished one ray at a time. Each lane's
@@ -24,15 +23,13 @@ impl Bvh8 {
     pub fn closest_packet(
         &self,
         geometry: &Geometry,
-        rays: &[Ray; 8],
-        active: u8,
-        t_min: f32,
+        packet: &RayPacket,
         closest: &mut [ClosestHit; 8],
     ) {
+        let (rays, active, t_min) = (packet.rays, packet.active, packet.t_min);
         if self.nodes.is_empty() || active == 0 {
             return;
         }
-        let packet = RayPacket::new(rays);
         let inv_dir = packet.inv_dir_lanes();
         let lanes_t_min = F32x8::splat(t_min);
         let limits =
@@ -78,7 +75,7 @@ impl Bvh8 {
             let mut entered = [(0u32, 0u8, 0f32); WIDTH];
             let mut count = 0;
             for (c, &(min, max)) in boxes.iter().enumerate().take(node.count as usize) {
-                let (hit, t) = slab_entry_packet(&packet, min, max, lanes_t_min, limit, mask);
+                let (hit, t) = slab_entry_packet(packet, min, max, lanes_t_min, limit, mask);
                 let hit = hit.bitmask();
                 if hit != 0 {
                     let t = t.to_array();
@@ -95,20 +92,14 @@ impl Bvh8 {
         }
     }
 
-    /// The lanes of `active` whose ray is blocked within `(t_min, t_max[k])`, as a bit
+    /// The active lanes of `packet` whose ray is blocked within its interval, as a bit
     /// mask, the rays traced together as in [`Bvh8::closest_packet`].
-    pub fn occluded_packet(
-        &self,
-        geometry: &Geometry,
-        rays: &[Ray; 8],
-        active: u8,
-        t_min: f32,
-        t_max: &[f32; 8],
-    ) -> u8 {
+    pub fn occluded_packet(&self, geometry: &Geometry, packet: &RayPacket) -> u8 {
+        let (rays, active) = (packet.rays, packet.active);
+        let (t_min, t_max) = (packet.t_min, &packet.t_max);
         if self.nodes.is_empty() || active == 0 {
             return 0;
         }
-        let packet = RayPacket::new(rays);
         let inv_dir = packet.inv_dir_lanes();
         let (lanes_t_min, lanes_t_max) = (F32x8::splat(t_min), F32x8::from_array(*t_max));
         let mut blocked = 0u8;
@@ -139,7 +130,7 @@ impl Bvh8 {
             let mask = Mask8::from_bitmask(lanes);
             let boxes = node.boxes.corners();
             for (c, &(min, max)) in boxes.iter().enumerate().take(node.count as usize) {
-                let (hit, _) = slab_entry_packet(&packet, min, max, lanes_t_min, lanes_t_max, mask);
+                let (hit, _) = slab_entry_packet(packet, min, max, lanes_t_min, lanes_t_max, mask);
                 let hit = hit.bitmask();
                 if hit != 0 {
                     stack.push((node.child[c], hit));
