@@ -16,15 +16,14 @@
 
 mod aabb;
 mod cone;
+mod interval;
 mod plane;
 mod sphere;
 mod triangle;
 
-pub use aabb::{
-    aabb, aabb_leaf, aabb_normal, aabb_packet, slab_entry, slab_entry8, slab_entry_packet,
-    BoxPack8, FAR_WIDENING,
-};
+pub use aabb::{aabb, aabb_leaf, aabb_normal, aabb_packet, BoxPack8};
 pub use cone::{cone, cone_normal, cone_packet};
+pub use interval::{beyond, widen_entry, widen_exit, BoxRay, BoxRay8, Intervals8};
 pub use plane::{plane, plane_packet};
 pub use sphere::{sphere, sphere_leaf, sphere_packet, SpherePack8};
 pub use triangle::{

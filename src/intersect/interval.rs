@@ -1,0 +1,353 @@
+//! The box test of every acceleration structure: where a ray may be inside an
+//! axis-aligned box, as the interval `[entry, exit]`, allowing for its own rounding (pbrt-v4's
+//! `Bounds3::IntersectP` with its `1 + 2 gamma(3)`). The BVH nodes (both widths, one ray
+//! or a packet) and the grid's bounds all take it from here.
+//!
+//! It is not the Box primitive's test ([`super::aabb`]), and the two must differ. A
+//! primitive test answers where the ray meets the surface: exact, and a ray passing
+//! beside the box misses. A node test answers whether a box may hold anything the ray
+//! meets: it must never say no when the objects' own tests, with their own rounding, would
+//! find a hit inside, so it errs towards visiting. A ray from far away (1e9 units, where
+//! floats are 64 apart) shows the difference: the slab distances are off by up to
+//! `GAMMA_3` of themselves, enough to pass beside a box the objects' tests find the ray
+//! in (fuzz finding 3, `tests/fuzz_findings.rs`).
+//!
+//! **Per-ray setup.** [`BoxRay`] (one ray) and [`BoxRay8`] (a packet) are built once per
+//! ray, as Embree's `TravRay` is: origin, inverse direction, and whether the ray is
+//! parallel to an axis, the only case that needs the NaN check below, so that the other
+//! rays' node tests are the bare slab test.
+//!
+//! **NaN convention.** A slab distance is NaN for `0 * inf`: a ray parallel to a slab's
+//! planes lying in one of them (a zero direction component, the origin on the face).
+//! Such a slab is ignored: its pair of distances gives NaN (`if a < b { a } else { b }`
+//! gives NaN when `b` is, and the parallel ray's check when `a` is), and the clipping,
+//! `if t > entry { t } else { entry }` and `if t < exit { t } else { exit }`
+//! (`maxps`/`minps`), keeps the clipped end when `t` is NaN. So a ray in a slab's plane
+//! passes, erring towards visiting, never towards missing (on either face, with either
+//! sign of zero). A NaN `t_min` or `t_max` is a miss.
+//!
+//! **The allowance.** Each slab distance `(corner - origin) * inv_dir` is off by up to
+//! `GAMMA_3` of itself, the entry one way and the exit the other, so the exit is widened
+//! by `2 GAMMA_3` of itself ([`widen_exit`]) before it is compared with the entry. The
+//! traversals skip a stacked box whose entry lies [`beyond`] the closest hit by the same
+//! rule, and the grid, which walks from the entry, steps back by the same allowance
+//! ([`widen_entry`]). The distances of a traversal are never negative (`t_min >= 0`), so
+//! the widenings are plain products.
+//!
+//! The SIMD twins ([`BoxRay::intervals8`], one ray against eight boxes, and
+//! [`BoxRay8::interval`], eight rays against one box) repeat the scalar arithmetic in the
+//! same order, so each lane equals [`BoxRay::interval`] bit for bit (`tests/simd.rs`).
+
+use std::ops::BitAnd;
+
+use glam::Vec3;
+
+use super::{BoxPack8, GAMMA_3};
+use crate::ray::RayPacket;
+use crate::simd::{F32x8, Mask8, Vec3x8};
+
+/// The rounding a box test allows for: twice the error bound of a slab distance.
+const ALLOWANCE: f32 = 2.0 * GAMMA_3;
+
+/// The latest distance a ray may still be in a box whose computed exit is `t` (or on the
+/// closest hit found at `t`).
+#[inline]
+pub fn widen_exit(t: f32) -> f32 {
+    t * (1.0 + ALLOWANCE)
+}
+
+/// The earliest distance a ray may already be in a box whose computed entry is `t >= 0`.
+#[inline]
+pub fn widen_entry(t: f32) -> f32 {
+    t * (1.0 - ALLOWANCE)
+}
+
+/// Whether a stacked box entered at `entry` lies beyond the closest hit at `limit`, and
+/// so cannot hold a closer hit or a tie: the skip rule of every traversal stack.
+#[inline]
+pub fn beyond(entry: f32, limit: f32) -> bool {
+    entry > widen_exit(limit)
+}
+
+/// [`widen_exit`] lane by lane.
+#[inline(always)]
+fn widen_exit8(t: F32x8) -> F32x8 {
+    t * F32x8::splat(1.0 + ALLOWANCE)
+}
+
+/// `if a > b { a } else { b }`: the `maxps` rule, so a NaN `a` keeps `b`.
+#[inline(always)]
+fn greater(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// `if a < b { a } else { b }`: the `minps` rule, so a NaN `a` keeps `b`.
+#[inline(always)]
+fn lesser(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// One ray set up for box tests.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxRay {
+    origin: Vec3,
+    inv_dir: Vec3,
+    /// Parallel to some axis (an infinite `inv_dir` component): only such a ray can lie
+    /// in a slab's plane, so only its slab distances need the NaN check.
+    parallel: bool,
+}
+
+impl BoxRay {
+    /// The setup of the ray from `origin` with `inv_dir = 1 / dir`.
+    #[inline]
+    pub fn new(origin: Vec3, inv_dir: Vec3) -> Self {
+        BoxRay {
+            origin,
+            inv_dir,
+            parallel: !inv_dir.is_finite(),
+        }
+    }
+
+    /// The interval `[entry, exit]` in which the ray may be inside the box `[min, max]`
+    /// within `[t_min, t_max]`, its exit widened by the allowance; `None` if it is empty.
+    #[inline]
+    pub fn interval(&self, min: Vec3, max: Vec3, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
+        let mut entry = t_min;
+        let mut exit = t_max;
+        for k in 0..3 {
+            let t1 = (min[k] - self.origin[k]) * self.inv_dir[k];
+            let t2 = (max[k] - self.origin[k]) * self.inv_dir[k];
+            // `lesser` and `greater` give NaN when `t2` is; a NaN `t1` must give NaN too.
+            let (near, far) = if self.parallel && t1.is_nan() {
+                (t1, t1)
+            } else {
+                (lesser(t1, t2), greater(t1, t2))
+            };
+            entry = greater(near, entry);
+            exit = lesser(far, exit);
+        }
+        let exit = widen_exit(exit);
+        (entry <= exit).then_some((entry, exit))
+    }
+
+    /// Whether the ray is parallel to some axis: a traversal runs one loop per answer,
+    /// each calling [`BoxRay::intervals8`] with it, so that the common ray's node test
+    /// carries no NaN check, not even a branch.
+    #[inline]
+    pub fn is_parallel(&self) -> bool {
+        self.parallel
+    }
+
+    /// The `inv_dir` the ray was set up with.
+    #[inline]
+    pub fn inv_dir(&self) -> Vec3 {
+        self.inv_dir
+    }
+
+    /// [`BoxRay::interval`] against the eight boxes of a pack (the children of an
+    /// eight-wide node), `PARALLEL` being [`BoxRay::is_parallel`]; lanes outside `active`
+    /// miss. No box value is inert here (NaN corners are a slab ignored), so padding must
+    /// stay outside `active`.
+    #[inline]
+    pub fn intervals8<const PARALLEL: bool>(
+        &self,
+        boxes: &BoxPack8,
+        t_min: f32,
+        t_max: f32,
+        active: Mask8,
+    ) -> Intervals8 {
+        debug_assert_eq!(PARALLEL, self.parallel);
+        let lanes = Lanes {
+            origin: Vec3x8::splat(self.origin),
+            inv_dir: Vec3x8::splat(self.inv_dir),
+            min: boxes.min,
+            max: boxes.max,
+            t_min: F32x8::splat(t_min),
+            t_max: F32x8::splat(t_max),
+        };
+        let parallel = if PARALLEL { Mask8::ALL } else { Mask8::NONE };
+        lanes.clip::<PARALLEL>(parallel) & active
+    }
+}
+
+/// Eight rays set up for box tests together: [`BoxRay`] lane by lane.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxRay8 {
+    origin: Vec3x8,
+    inv_dir: Vec3x8,
+    /// The lanes whose ray is parallel to some axis.
+    parallel: Mask8,
+}
+
+impl BoxRay8 {
+    /// The setup of the packet's rays, with the `inv_dir` it holds.
+    #[inline]
+    pub fn new(rays: &RayPacket) -> Self {
+        let inv = rays.inv_dir;
+        BoxRay8 {
+            origin: rays.origin,
+            inv_dir: inv,
+            parallel: !(inv.x.is_finite() & inv.y.is_finite() & inv.z.is_finite()),
+        }
+    }
+
+    /// [`BoxRay::interval`] for each ray against the box `[min, max]` (packet
+    /// traversal); lanes outside `active` miss.
+    #[inline]
+    pub fn interval(
+        &self,
+        min: Vec3,
+        max: Vec3,
+        t_min: F32x8,
+        t_max: F32x8,
+        active: Mask8,
+    ) -> Intervals8 {
+        let lanes = Lanes {
+            origin: self.origin,
+            inv_dir: self.inv_dir,
+            min: Vec3x8::splat(min),
+            max: Vec3x8::splat(max),
+            t_min,
+            t_max,
+        };
+        if self.parallel.any() {
+            lanes.clip::<true>(self.parallel) & active
+        } else {
+            lanes.clip::<false>(Mask8::NONE) & active
+        }
+    }
+}
+
+/// Eight intervals: the lanes that hit, and their entries and widened exits (unspecified
+/// in the other lanes).
+#[derive(Clone, Copy, Debug)]
+pub struct Intervals8 {
+    pub hit: Mask8,
+    pub entry: F32x8,
+    pub exit: F32x8,
+}
+
+impl BitAnd<Mask8> for Intervals8 {
+    type Output = Intervals8;
+    /// The intervals of the lanes of `active` only.
+    #[inline(always)]
+    fn bitand(self, active: Mask8) -> Intervals8 {
+        Intervals8 {
+            hit: self.hit & active,
+            ..self
+        }
+    }
+}
+
+/// The operands of [`BoxRay::interval`], lane by lane.
+struct Lanes {
+    origin: Vec3x8,
+    inv_dir: Vec3x8,
+    min: Vec3x8,
+    max: Vec3x8,
+    t_min: F32x8,
+    t_max: F32x8,
+}
+
+impl Lanes {
+    /// The body of [`BoxRay::interval`], axes in the same order, `minps`/`maxps` as
+    /// `lesser`/`greater`; with `PARALLEL`, the NaN check for the lanes of `parallel`
+    /// (without, no lane may be parallel).
+    #[inline(always)]
+    fn clip<const PARALLEL: bool>(&self, parallel: Mask8) -> Intervals8 {
+        let t1 = (self.min - self.origin) * self.inv_dir;
+        let t2 = (self.max - self.origin) * self.inv_dir;
+        let mut entry = self.t_min;
+        let mut exit = self.t_max;
+        for (t1, t2) in [(t1.x, t2.x), (t1.y, t2.y), (t1.z, t2.z)] {
+            let (mut near, mut far) = (t1.min(t2), t1.max(t2));
+            if PARALLEL {
+                let nan = t1.is_nan() & parallel;
+                (near, far) = (nan.select(t1, near), nan.select(t1, far));
+            }
+            entry = near.max(entry);
+            exit = far.min(exit);
+        }
+        let exit = widen_exit8(exit);
+        Intervals8 {
+            hit: entry.le(exit),
+            entry,
+            exit,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const INF: f32 = f32::INFINITY;
+
+    fn unit_box(origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
+        BoxRay::new(origin, dir.recip()).interval(Vec3::ZERO, Vec3::ONE, t_min, t_max)
+    }
+
+    #[test]
+    fn entry_and_widened_exit() {
+        let (entry, exit) = unit_box(Vec3::new(0.5, 0.5, -2.0), Vec3::Z, 0.0, INF).unwrap();
+        assert_eq!((entry, exit), (2.0, widen_exit(3.0)));
+        assert!(exit > 3.0);
+        // From inside, the entry is `t_min`; backwards through the `max` face.
+        let inside = unit_box(Vec3::splat(0.5), Vec3::NEG_X, 0.0, INF).unwrap();
+        assert_eq!(inside, (0.0, widen_exit(0.5)));
+        assert_eq!(
+            unit_box(Vec3::new(0.5, 0.5, 3.0), Vec3::NEG_Z, 0.0, INF)
+                .unwrap()
+                .0,
+            2.0
+        );
+        // Behind, beside, and beyond `t_max`.
+        assert_eq!(unit_box(Vec3::new(0.5, 0.5, 2.0), Vec3::Z, 0.0, INF), None);
+        assert_eq!(unit_box(Vec3::new(2.0, 0.5, -2.0), Vec3::Z, 0.0, INF), None);
+        assert_eq!(unit_box(Vec3::new(0.5, 0.5, -2.0), Vec3::Z, 0.0, 1.5), None);
+        assert_eq!(unit_box(Vec3::new(0.5, 0.5, -2.0), Vec3::Z, 0.0, NAN), None);
+    }
+
+    const NAN: f32 = f32::NAN;
+
+    /// A ray running in the plane of a face (zero direction component, origin on the
+    /// face: a NaN slab) passes, on either face and with either sign of zero.
+    #[test]
+    fn a_ray_in_a_face_plane_passes() {
+        for face in [0.0, 1.0] {
+            for zero in [0.0, -0.0] {
+                let origin = Vec3::new(face, 0.5, -2.0);
+                let dir = Vec3::new(zero, 0.0, 1.0);
+                let interval = unit_box(origin, dir, 0.0, 10.0);
+                assert_eq!(
+                    interval.map(|i| i.0),
+                    Some(2.0),
+                    "face x = {face}, dir.x = {zero:?}"
+                );
+            }
+        }
+    }
+
+    /// The allowance: a box the computed distances put just beside the ray is still
+    /// entered, and a stacked entry just past the closest hit is not skipped.
+    #[test]
+    fn the_allowance_keeps_a_grazing_box() {
+        // Entry and exit computed one float apart the wrong way round.
+        let t = 1e9f32;
+        let (min, max) = (Vec3::new(t.next_up(), -1.0, -1.0), Vec3::new(2e9, 1.0, 1.0));
+        let ray = BoxRay::new(Vec3::ZERO, Vec3::X.recip());
+        assert!(ray.interval(min, max, 0.0, t).is_some());
+        assert!(!beyond(t.next_up(), t));
+        assert!(beyond(2.0 * t, t));
+        assert!(widen_entry(t) < t && widen_exit(t) > t);
+        assert_eq!((widen_entry(0.0), widen_exit(INF)), (0.0, INF));
+    }
+}
