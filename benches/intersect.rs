@@ -6,7 +6,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
-use p3trace::intersect::{self, BoxPack8, SpherePack8, TrianglePack8};
+use p3trace::intersect::{self, BoxPack8, BoxRay, BoxRay8, SpherePack8, TrianglePack8};
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::simd::{F32x8, Mask8};
 
@@ -98,18 +98,14 @@ fn packets(c: &mut Criterion) {
     c.bench_function("packet/triangle/scalar x8", |b| {
         b.iter(|| black_box(&rays).map(|r| intersect::triangle(&r, p0, e1, e2, 0.0, f32::INFINITY)))
     });
-    c.bench_function("packet/slab/simd", |b| {
-        b.iter(|| intersect::slab_entry_packet(black_box(&packet), bmin, bmax, lo, hi, Mask8::ALL))
+    let box_rays = BoxRay8::new(&packet);
+    c.bench_function("packet/box interval/simd", |b| {
+        b.iter(|| black_box(&box_rays).interval(bmin, bmax, lo, hi, Mask8::ALL))
     });
     // The packet holds its inv_dir; the scalar rays get theirs computed outside the loop.
-    let inv: [Vec3; 8] = rays.map(|r| r.dir.recip());
-    c.bench_function("packet/slab/scalar x8", |b| {
-        b.iter(|| {
-            std::array::from_fn::<_, 8, _>(|i| {
-                let r = &black_box(&rays)[i];
-                intersect::slab_entry(r.origin, inv[i], bmin, bmax, 0.0, f32::INFINITY)
-            })
-        })
+    let scalar_rays: [BoxRay; 8] = rays.map(|r| BoxRay::new(r.origin, r.dir.recip()));
+    c.bench_function("packet/box interval/scalar x8", |b| {
+        b.iter(|| black_box(&scalar_rays).map(|r| r.interval(bmin, bmax, 0.0, f32::INFINITY)))
     });
 }
 
@@ -176,24 +172,17 @@ fn leaves(c: &mut Criterion) {
                 .fold(inf, |best, t| t.map_or(best, |t| t.min(best)))
         })
     });
-    c.bench_function("leaf/slab/simd", |b| {
-        b.iter(|| {
-            intersect::slab_entry8(
-                black_box(ray.origin),
-                inv_dir,
-                &box_pack,
-                0.0,
-                inf,
-                Mask8::ALL,
-            )
-        })
+    let box_ray = BoxRay::new(ray.origin, inv_dir);
+    c.bench_function("leaf/box interval/simd", |b| {
+        // The ray runs along z, parallel to x and y.
+        b.iter(|| black_box(&box_ray).intervals8(&box_pack, 0.0, inf, Mask8::ALL))
     });
-    c.bench_function("leaf/slab/scalar x8", |b| {
+    c.bench_function("leaf/box interval/scalar x8", |b| {
         b.iter(|| {
-            let origin = black_box(ray.origin);
+            let box_ray = black_box(&box_ray);
             boxes
                 .iter()
-                .map(|&(lo, hi)| intersect::slab_entry(origin, inv_dir, lo, hi, 0.0, inf))
+                .map(|&(lo, hi)| box_ray.interval(lo, hi, 0.0, inf))
                 .enumerate()
                 .fold(0u8, |bits, (i, t)| bits | u8::from(t.is_some()) << i)
         })

@@ -124,7 +124,8 @@ fn far_plane_difference(kind: AccelKind, mode: RenderMode) -> Option<String> {
 /// plane some 1e9 from a grid 5 units wide, and the grid's box test, rounding its
 /// distances (about 1e9, 64 apart from one float to the next) one way, missed the box
 /// that the sphere's own test found the ray in. Fixed in `accel::grid`: the box test
-/// widens its interval by the rounding it can have.
+/// widens its interval by the rounding it can have (now the structures' one box test,
+/// `intersect::BoxRay::interval`).
 #[test]
 fn the_grid_finds_a_shadow_ray_from_1e9_away() {
     for mode in [RenderMode::Scalar, RenderMode::Packet] {
@@ -135,7 +136,9 @@ fn the_grid_finds_a_shadow_ray_from_1e9_away() {
 
 /// The same scene through the default (8-wide) BVH, one ray at a time and in packets:
 /// its node test had the same limit. Fixed in `intersect::aabb`: the node test (and its
-/// SIMD twins) compares the entry with the exit widened by `FAR_WIDENING`.
+/// SIMD twins) compares the entry with the widened exit; now `intersect::BoxRay::interval`
+/// and `intersect::widen_exit`, which the traversals' skip rule (`intersect::beyond`)
+/// shares.
 #[test]
 fn the_bvh_finds_a_shadow_ray_from_1e9_away() {
     for mode in [RenderMode::Scalar, RenderMode::Packet] {

@@ -13,8 +13,7 @@ use glam::{IVec3, UVec3, Vec3};
 
 use super::bounds::prim_bounds;
 use super::hit::{for_lanes, ClosestHit};
-use crate::intersect::Aabb;
-use crate::intersect::GAMMA_3;
+use crate::intersect::{widen_entry, Aabb, BoxRay};
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{lane_mask, Hit, Ray, RayPacket};
 use crate::scene::Geometry;
@@ -414,7 +413,14 @@ impl Dda {
         if grid.refs.is_empty() {
             return None;
         }
-        let (t_enter, t_leave) = slab(&grid.bounds, ray, inv_dir, t_min, t_max)?;
+        let bounds = BoxRay::new(ray.origin, inv_dir);
+        let (entry, exit) = bounds.interval(grid.bounds.min, grid.bounds.max, t_min, t_max)?;
+        // The start cell is the one holding the entry point, so the entry must not be
+        // late: a ray entering across the corner of a cell would skip it. Stepped back by
+        // the allowance, the walk may start a cell early, which only costs a visit.
+        let t_enter = t_min.max(widen_entry(entry));
+        // The exit is widened already; the walk needs nothing beyond the ray's end.
+        let t_leave = t_max.min(exit);
         let cell = grid.cell_of(ray.at(t_enter)).as_ivec3();
         let mut t_next = Vec3::INFINITY;
         let mut t_delta = Vec3::INFINITY;
@@ -505,34 +511,6 @@ pub fn cells_per_axis(extent: Vec3, objects: usize, density: f32) -> UVec3 {
             n.min(MAX_AXIS_CELLS as f64) as u32
         }
     }))
-}
-
-/// Where the ray is inside `b` within `(t_min, t_max)`: entry and exit distances.
-/// `f32::min`/`max` ignore the NaN of `0 * inf`, so a ray in a slab's plane passes.
-fn slab(b: &Aabb, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
-    let mut near = t_min;
-    let mut far = t_max;
-    for k in 0..3 {
-        let t1 = (b.min[k] - ray.origin[k]) * inv_dir[k];
-        let t2 = (b.max[k] - ray.origin[k]) * inv_dir[k];
-        // Each distance is off by up to `GAMMA_3` of itself; widened by twice that, the
-        // interval holds the true one, or a ray from far away could miss a box that the
-        // objects' own tests find it in (fuzz finding: a shadow ray 1e9 from the grid).
-        near = near.max(widened(t1.min(t2), -1.0));
-        far = far.min(widened(t1.max(t2), 1.0));
-    }
-    (near <= far).then_some((near, far))
-}
-
-/// `t` moved by `2 GAMMA_3` of itself towards `direction` (-1 or 1), by a product so
-/// that infinities stay what they are.
-fn widened(t: f32, direction: f32) -> f32 {
-    let grow = if (t > 0.0) == (direction > 0.0) {
-        1.0
-    } else {
-        -1.0
-    };
-    t * (1.0 + grow * 2.0 * GAMMA_3)
 }
 
 thread_local! {

@@ -1,6 +1,13 @@
+//! The Box primitive's test: exact, it returns where the ray meets the box's surface (the
+//! entry, or the exit from inside) in the open interval `(t_min, t_max)`, as every
+//! primitive test does, so a ray passing beside the box misses it. The acceleration
+//! structures' box test is another routine with another contract (`interval.rs`: where the
+//! ray may be inside, allowing for rounding, erring towards visiting); sharing code would
+//! change this test's bits, and so the images of scenes with boxes.
+
 use glam::Vec3;
 
-use super::{first_root_in, first_root_in8, GAMMA_3};
+use super::{first_root_in, first_root_in8};
 use super::{packet_hits, packet_interval, Aabb, Shapes, TriangleHit, Vec3s};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
@@ -37,11 +44,11 @@ fn smallest(t: Vec3) -> f32 {
 }
 
 /// Eight boxes side by side: the primitive boxes of a leaf for [`aabb_leaf`], or the
-/// children of an eight-wide BVH node for [`slab_entry8`].
+/// children of an eight-wide BVH node for [`super::BoxRay::intervals8`].
 ///
 /// Unused slots hold [`BoxPack8::PAD`] (NaN corners), which [`aabb_leaf`] never hits:
 /// every slab distance is NaN and so is the entry. No corner values can make a slot
-/// inert for [`slab_entry8`], whose NaN-dropping clipping starts from `[t_min, t_max]`
+/// inert for [`super::BoxRay::intervals8`], whose clipping starts from `[t_min, t_max]`
 /// (NaN slabs are ignored, an inverted or infinite box spans everything, a box at
 /// infinity is entered at `t = inf` when `t_max` is infinite); leave its padding out of
 /// the `active` mask instead.
@@ -59,18 +66,6 @@ impl BoxPack8 {
     ///
     /// # Panics
     /// If given more than eight boxes.
-    /// Each slot's `(min, max)` corners.
-    #[inline]
-    pub fn corners(&self) -> [(Vec3, Vec3); 8] {
-        let [lo, hi] = [self.min, self.max].map(|v| [v.x, v.y, v.z].map(|c| c.to_array()));
-        std::array::from_fn(|k| {
-            (
-                Vec3::new(lo[0][k], lo[1][k], lo[2][k]),
-                Vec3::new(hi[0][k], hi[1][k], hi[2][k]),
-            )
-        })
-    }
-
     pub fn new(boxes: &[(Vec3, Vec3)]) -> Self {
         assert!(boxes.len() <= 8, "a pack holds at most 8 boxes");
         let corner = |pick: fn(&(Vec3, Vec3)) -> Vec3| {
@@ -82,6 +77,18 @@ impl BoxPack8 {
             min: corner(|b| b.0),
             max: corner(|b| b.1),
         }
+    }
+
+    /// Each slot's `(min, max)` corners.
+    #[inline]
+    pub fn corners(&self) -> [(Vec3, Vec3); 8] {
+        let [lo, hi] = [self.min, self.max].map(|v| [v.x, v.y, v.z].map(|c| c.to_array()));
+        std::array::from_fn(|k| {
+            (
+                Vec3::new(lo[0][k], lo[1][k], lo[2][k]),
+                Vec3::new(hi[0][k], hi[1][k], hi[2][k]),
+            )
+        })
     }
 }
 
@@ -153,108 +160,6 @@ fn aabb_lanes(
     let far = hi.x.min(hi.y.min(hi.z));
     let (hit, t) = first_root_in8(near, far, t_min, t_max);
     (hit & near.le(far), t)
-}
-
-/// The entry distance of a ray into the box `[min, max]` within `[t_min, t_max]` (the
-/// BVH's node test): the slabs clip the interval, and the clipped start is returned if
-/// anything is left. `min`/`max` follow `minps`/`maxps` (`a < b ? a : b`), so the NaN of
-/// `0 * inf` (a ray in a slab's plane) comes out as their right operand and is then
-/// dropped against `near`/`far`: such a ray passes, erring towards visiting, never towards
-/// missing. Its SIMD twins use the same rule, instruction for instruction.
-#[inline]
-pub fn slab_entry(
-    origin: Vec3,
-    inv_dir: Vec3,
-    min: Vec3,
-    max: Vec3,
-    t_min: f32,
-    t_max: f32,
-) -> Option<f32> {
-    let lesser = |a: f32, b: f32| if a < b { a } else { b };
-    let greater = |a: f32, b: f32| if a > b { a } else { b };
-    let mut near = t_min;
-    let mut far = t_max;
-    for k in 0..3 {
-        let t1 = (min[k] - origin[k]) * inv_dir[k];
-        let t2 = (max[k] - origin[k]) * inv_dir[k];
-        near = greater(lesser(t1, t2), near);
-        far = lesser(greater(t1, t2), far);
-    }
-    (near <= far * FAR_WIDENING).then_some(near)
-}
-
-/// The node test compares its entry with its exit widened by this factor: each slab
-/// distance carries up to `GAMMA_3` of itself in rounding, so without it a ray starting
-/// far from a box (1e9 away, where floats are 64 apart) could pass beside a box that
-/// the objects' own tests find it in (fuzz finding 3). Traversals skip a stacked node
-/// by the same rule: when its entry exceeds the closest hit times this factor.
-pub const FAR_WIDENING: f32 = 1.0 + 2.0 * GAMMA_3;
-
-/// [`slab_entry`] for eight rays against one box (packet traversal); lanes outside
-/// `active` miss.
-#[inline]
-pub fn slab_entry_packet(
-    rays: &RayPacket,
-    min: Vec3,
-    max: Vec3,
-    t_min: F32x8,
-    t_max: F32x8,
-    active: Mask8,
-) -> (Mask8, F32x8) {
-    let (hit, t) = slab_lanes(
-        rays.origin,
-        rays.inv_dir,
-        Vec3x8::splat(min),
-        Vec3x8::splat(max),
-        t_min,
-        t_max,
-    );
-    (hit & active, t)
-}
-
-/// [`slab_entry`] for one ray against eight boxes (the children of an eight-wide node);
-/// lanes outside `active` miss, and padding must be outside it (see [`BoxPack8`]).
-#[inline]
-pub fn slab_entry8(
-    origin: Vec3,
-    inv_dir: Vec3,
-    boxes: &BoxPack8,
-    t_min: f32,
-    t_max: f32,
-    active: Mask8,
-) -> (Mask8, F32x8) {
-    let (hit, t) = slab_lanes(
-        Vec3x8::splat(origin),
-        Vec3x8::splat(inv_dir),
-        boxes.min,
-        boxes.max,
-        F32x8::splat(t_min),
-        F32x8::splat(t_max),
-    );
-    (hit & active, t)
-}
-
-/// The body of [`slab_entry`], lane by lane, axes in the same order.
-#[inline(always)]
-fn slab_lanes(
-    origin: Vec3x8,
-    inv_dir: Vec3x8,
-    min: Vec3x8,
-    max: Vec3x8,
-    t_min: F32x8,
-    t_max: F32x8,
-) -> (Mask8, F32x8) {
-    let t1 = (min - origin) * inv_dir;
-    let t2 = (max - origin) * inv_dir;
-    let mut near = t_min;
-    let mut far = t_max;
-    for (a, b) in [(t1.x, t2.x), (t1.y, t2.y), (t1.z, t2.z)] {
-        // The NaN of `0 * inf` comes out of `min`/`max` as their right operand, so it
-        // reaches `near` and `far` on the left, where it is dropped.
-        near = a.min(b).max(near);
-        far = a.max(b).min(far);
-    }
-    (near.le(far * F32x8::splat(FAR_WIDENING)), near)
 }
 
 /// Outward normal of the face of `[min, max]` nearest to the point `p` (a hit point).

@@ -23,17 +23,16 @@
 mod aabb;
 mod bounds;
 mod cone;
+mod interval;
 mod moving_sphere;
 mod plane;
 mod sphere;
 mod triangle;
 
-pub use aabb::{
-    aabb, aabb_leaf, aabb_normal, aabb_packet, slab_entry, slab_entry8, slab_entry_packet,
-    BoxPack8, Boxes, FAR_WIDENING,
-};
+pub use aabb::{aabb, aabb_leaf, aabb_normal, aabb_packet, BoxPack8, Boxes};
 pub use bounds::Aabb;
 pub use cone::{cone, cone_normal, cone_packet, Cones};
+pub use interval::{beyond, widen_entry, widen_exit, BoxRay, BoxRay8, Intervals8};
 pub use moving_sphere::MovingSpheres;
 pub use plane::{plane, plane_packet, Planes};
 pub use sphere::{sphere, sphere_leaf, sphere_packet, SpherePack8, Spheres};

@@ -20,8 +20,7 @@ use glam::Vec3;
 
 use super::hit::ClosestHit;
 use super::stack::Stack;
-use crate::intersect::Aabb;
-use crate::intersect::{slab_entry, FAR_WIDENING};
+use crate::intersect::{beyond, Aabb, BoxRay};
 use crate::prim::PrimId;
 use crate::ray::Ray;
 use crate::scene::Geometry;
@@ -77,18 +76,13 @@ impl Node {
         self.offset as usize
     }
 
-    /// The entry distance of the ray into the node's box within `[t_min, t_max]`
-    /// ([`slab_entry`]: a ray in a slab's plane passes, erring towards visiting).
+    /// The entry distance of the ray into the node's box within `[t_min, t_max]`, by the
+    /// structures' box test ([`BoxRay::interval`]: allowing for its rounding, a ray in a
+    /// slab's plane passes, erring towards visiting).
     #[inline]
-    fn entry(&self, origin: Vec3, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
-        slab_entry(
-            origin,
-            inv_dir,
-            Vec3::from_array(self.min),
-            Vec3::from_array(self.max),
-            t_min,
-            t_max,
-        )
+    fn entry(&self, ray: &BoxRay, t_min: f32, t_max: f32) -> Option<f32> {
+        let (min, max) = (Vec3::from_array(self.min), Vec3::from_array(self.max));
+        ray.interval(min, max, t_min, t_max).map(|(entry, _)| entry)
     }
 }
 
@@ -197,15 +191,15 @@ impl Bvh2 {
         let Some(root) = self.nodes.first() else {
             return;
         };
-        let Some(t_root) = root.entry(ray.origin, inv_dir, t_min, closest.limit()) else {
+        let box_ray = BoxRay::new(ray.origin, inv_dir);
+        let Some(t_root) = root.entry(&box_ray, t_min, closest.limit()) else {
             return;
         };
         let mut stack = Stack::<(u32, f32), MAX_DEPTH>::new();
         stack.push((0, t_root));
         while let Some((mut index, t_entry)) = stack.pop() {
-            // Entries beyond the closest hit cannot hold a closer one (ties may); by the
-            // node test's own rounding allowance.
-            if t_entry > closest.limit() * FAR_WIDENING {
+            // Entries beyond the closest hit cannot hold a closer one (ties may).
+            if beyond(t_entry, closest.limit()) {
                 continue;
             }
             loop {
@@ -219,8 +213,8 @@ impl Bvh2 {
                 }
                 let (left, right) = (index + 1, node.offset);
                 let limit = closest.limit();
-                let t_left = self.nodes[left as usize].entry(ray.origin, inv_dir, t_min, limit);
-                let t_right = self.nodes[right as usize].entry(ray.origin, inv_dir, t_min, limit);
+                let t_left = self.nodes[left as usize].entry(&box_ray, t_min, limit);
+                let t_right = self.nodes[right as usize].entry(&box_ray, t_min, limit);
                 index = match (t_left, t_right) {
                     (Some(tl), Some(tr)) => {
                         let (near, far, t_far) = if tl <= tr {
@@ -250,11 +244,12 @@ impl Bvh2 {
         if self.nodes.is_empty() {
             return false;
         }
+        let box_ray = BoxRay::new(ray.origin, inv_dir);
         let mut stack = Stack::<u32, MAX_DEPTH>::new();
         stack.push(0);
         while let Some(index) = stack.pop() {
             let node = &self.nodes[index as usize];
-            if node.entry(ray.origin, inv_dir, t_min, t_max).is_none() {
+            if node.entry(&box_ray, t_min, t_max).is_none() {
                 continue;
             }
             if node.count > 0 {

@@ -1,9 +1,7 @@
 //! The 8-wide node: eight children's boxes side by side and their references, and the
 //! encoding of a reference to a node or to a leaf.
 
-use glam::Vec3;
-
-use crate::intersect::{slab_entry8, BoxPack8};
+use crate::intersect::{BoxPack8, BoxRay};
 use crate::simd::Mask8;
 
 /// Children per node.
@@ -46,7 +44,7 @@ pub struct Node8 {
     pub boxes: BoxPack8,
     pub child: [ChildRef; WIDTH],
     /// Children in use: slots `0..count`. The others hold padding boxes, which no box
-    /// value can make the slab test miss, so they are left out of its mask.
+    /// value can make the box test miss, so they are left out of its mask.
     pub count: u32,
 }
 
@@ -56,15 +54,9 @@ impl Node8 {
     /// The used children that the ray enters within `[t_min, t_max]`, as a bit mask, and
     /// their entry distances (lanes outside the mask are unspecified).
     #[inline]
-    pub fn entries(
-        &self,
-        origin: Vec3,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> (u8, [f32; WIDTH]) {
+    pub fn entries(&self, ray: &BoxRay, t_min: f32, t_max: f32) -> (u8, [f32; WIDTH]) {
         let used = Mask8::from_bitmask(((1u32 << self.count) - 1) as u8);
-        let (hit, t) = slab_entry8(origin, inv_dir, &self.boxes, t_min, t_max, used);
-        (hit.bitmask(), t.to_array())
+        let intervals = ray.intervals8(&self.boxes, t_min, t_max, used);
+        (intervals.hit.bitmask(), intervals.entry.to_array())
     }
 }

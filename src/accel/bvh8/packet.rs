@@ -6,7 +6,7 @@ use super::node::{ChildRef, LEAF, WIDTH};
 use super::{Bvh8, STACK_SIZE};
 use crate::accel::hit::{for_lanes, ClosestHit};
 use crate::accel::stack::Stack;
-use crate::intersect::{slab_entry_packet, FAR_WIDENING};
+use crate::intersect::{beyond, BoxRay8};
 use crate::ray::RayPacket;
 use crate::scene::Geometry;
 use crate::simd::{F32x8, Mask8};
@@ -31,6 +31,7 @@ impl Bvh8 {
             return;
         }
         let inv_dir = packet.inv_dir_lanes();
+        let box_rays = BoxRay8::new(packet);
         let lanes_t_min = F32x8::splat(t_min);
         let limits =
             |closest: &[ClosestHit; 8]| F32x8::from_array(closest.each_ref().map(|c| c.limit()));
@@ -40,7 +41,7 @@ impl Bvh8 {
         while let Some((child, lanes, t_entry)) = stack.pop() {
             // Beyond every lane's closest hit: nothing closer inside (ties are visited).
             let farthest = limit.to_array();
-            if (0..8).all(|k| lanes & (1 << k) == 0 || t_entry > farthest[k] * FAR_WIDENING) {
+            if (0..8).all(|k| lanes & (1 << k) == 0 || beyond(t_entry, farthest[k])) {
                 continue;
             }
             if child & LEAF != 0 || lanes.count_ones() <= SINGLE_RAY_LANES {
@@ -75,10 +76,10 @@ impl Bvh8 {
             let mut entered = [(0u32, 0u8, 0f32); WIDTH];
             let mut count = 0;
             for (c, &(min, max)) in boxes.iter().enumerate().take(node.count as usize) {
-                let (hit, t) = slab_entry_packet(packet, min, max, lanes_t_min, limit, mask);
-                let hit = hit.bitmask();
+                let intervals = box_rays.interval(min, max, lanes_t_min, limit, mask);
+                let hit = intervals.hit.bitmask();
                 if hit != 0 {
-                    let t = t.to_array();
+                    let t = intervals.entry.to_array();
                     let mut nearest = f32::INFINITY;
                     for_lanes(hit, |k| nearest = nearest.min(t[k]));
                     entered[count] = (node.child[c], hit, nearest);
@@ -101,6 +102,7 @@ impl Bvh8 {
             return 0;
         }
         let inv_dir = packet.inv_dir_lanes();
+        let box_rays = BoxRay8::new(packet);
         let (lanes_t_min, lanes_t_max) = (F32x8::splat(t_min), F32x8::from_array(*t_max));
         let mut blocked = 0u8;
         let mut stack = Stack::<(ChildRef, u8), STACK_SIZE>::new();
@@ -130,8 +132,8 @@ impl Bvh8 {
             let mask = Mask8::from_bitmask(lanes);
             let boxes = node.boxes.corners();
             for (c, &(min, max)) in boxes.iter().enumerate().take(node.count as usize) {
-                let (hit, _) = slab_entry_packet(packet, min, max, lanes_t_min, lanes_t_max, mask);
-                let hit = hit.bitmask();
+                let intervals = box_rays.interval(min, max, lanes_t_min, lanes_t_max, mask);
+                let hit = intervals.hit.bitmask();
                 if hit != 0 {
                     stack.push((node.child[c], hit));
                 }

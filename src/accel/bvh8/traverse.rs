@@ -8,7 +8,7 @@ use super::node::{leaf_parts, ChildRef, LEAF, SPHERES, TRIANGLES};
 use super::{Bvh8, STACK_SIZE};
 use crate::accel::hit::{for_lanes, ClosestHit};
 use crate::accel::stack::Stack;
-use crate::intersect::{sphere_leaf, triangle_leaf, FAR_WIDENING};
+use crate::intersect::{beyond, sphere_leaf, triangle_leaf, BoxRay};
 use crate::ray::{Hit, Ray};
 use crate::scene::Geometry;
 
@@ -98,6 +98,7 @@ impl Bvh8 {
     }
 
     /// [`Bvh8::closest`] over the subtree under `start`.
+    #[inline]
     pub(super) fn closest_from(
         &self,
         start: ChildRef,
@@ -107,12 +108,12 @@ impl Bvh8 {
         t_min: f32,
         closest: &mut ClosestHit,
     ) {
+        let box_ray = BoxRay::new(ray.origin, inv_dir);
         let mut stack = Stack::<(ChildRef, f32), STACK_SIZE>::new();
         stack.push((start, t_min));
         while let Some((child, t_entry)) = stack.pop() {
-            // Entries beyond the closest hit cannot hold a closer one (ties may); by the
-            // node test's own rounding allowance.
-            if t_entry > closest.limit() * FAR_WIDENING {
+            // Entries beyond the closest hit cannot hold a closer one (ties may).
+            if beyond(t_entry, closest.limit()) {
                 continue;
             }
             if child & LEAF != 0 {
@@ -120,7 +121,7 @@ impl Bvh8 {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let (hits, entries) = node.entries(ray.origin, inv_dir, t_min, closest.limit());
+            let (hits, entries) = node.entries(&box_ray, t_min, closest.limit());
             // The hit children sorted on the stack, the nearest on top to be popped next.
             let floor = stack.len();
             for_lanes(hits, |k| {
@@ -150,6 +151,7 @@ impl Bvh8 {
         t_min: f32,
         t_max: f32,
     ) -> bool {
+        let box_ray = BoxRay::new(ray.origin, inv_dir);
         let mut stack = Stack::<ChildRef, STACK_SIZE>::new();
         stack.push(start);
         while let Some(child) = stack.pop() {
@@ -160,7 +162,7 @@ impl Bvh8 {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let (hits, _) = node.entries(ray.origin, inv_dir, t_min, t_max);
+            let (hits, _) = node.entries(&box_ray, t_min, t_max);
             for_lanes(hits, |k| stack.push(node.child[k]));
         }
         false

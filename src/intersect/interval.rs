@@ -1,0 +1,339 @@
+//! The box test of every acceleration structure: where a ray may be inside an
+//! axis-aligned box, as the interval `[entry, exit]`, allowing for its own rounding (pbrt-v4's
+//! `Bounds3::IntersectP` with its `1 + 2 gamma(3)`). The BVH nodes (both widths, one ray
+//! or a packet) and the grid's bounds all take it from here.
+//!
+//! It is not the Box primitive's test ([`super::aabb`]), and the two must differ. A
+//! primitive test answers where the ray meets the surface: exact, and a ray passing
+//! beside the box misses. A node test answers whether a box may hold anything the ray
+//! meets: it must never say no when the objects' own tests, with their own rounding, would
+//! find a hit inside, so it errs towards visiting. A ray from far away (1e9 units, where
+//! floats are 64 apart) shows the difference: the slab distances are off by up to
+//! `GAMMA_3` of themselves, enough to pass beside a box the objects' tests find the ray
+//! in (fuzz finding 3, `tests/fuzz_findings.rs`).
+//!
+//! **Per-ray setup.** [`BoxRay`] (one ray) and [`BoxRay8`] (a packet) are built once per
+//! ray, as Embree's `TravRay` is: the origin and a safe inverse direction, whose
+//! infinite components (a ray parallel to an axis) are clamped to `±f32::MAX` (as
+//! Embree's `rcp_safe` keeps them finite). So no slab distance is NaN: the `0 * inf` of a
+//! ray lying in a slab's plane becomes `±0`, so that ray is in the slab on the side its
+//! zero's sign points to (it passes where that points into the box, and leaves at
+//! `t = 0` where it points out), and a parallel ray beside the slab gets two distances
+//! of one sign and misses. No hit lies on a face of a structure's box (every primitive's
+//! box is padded, `accel::bounds`), so either answer for such a ray finds every hit; a
+//! branch-free NaN rule that lets it pass on both faces cost 1.4% more instructions on
+//! the protocol (a second traversal loop per kind of ray). Finite inverse directions are
+//! kept as they are, so every other ray's distances are the bare slab test's.
+//!
+//! **NaN convention.** Only NaN corners (the padding of a pack) or a NaN `t_min` or
+//! `t_max` give NaN. The clipping, `if t > entry { t } else { entry }` and
+//! `if t < exit { t } else { exit }` (`maxps`/`minps`), keeps the clipped end when `t` is
+//! NaN, so padding boxes are entered and stay outside the `active` mask; a NaN `t_min` or
+//! `t_max` is a miss.
+//!
+//! **The allowance.** Each slab distance `(corner - origin) * inv_dir` is off by up to
+//! `GAMMA_3` of itself, the entry one way and the exit the other, so the exit is widened
+//! by `2 GAMMA_3` of itself ([`widen_exit`]) before it is compared with the entry. The
+//! traversals skip a stacked box whose entry lies [`beyond`] the closest hit by the same
+//! rule, and the grid, which walks from the entry, steps back by the same allowance
+//! ([`widen_entry`]). The distances of a traversal are never negative (`t_min >= 0`), so
+//! the widenings are plain products.
+//!
+//! The SIMD twins ([`BoxRay::intervals8`], one ray against eight boxes, and
+//! [`BoxRay8::interval`], eight rays against one box) repeat the scalar arithmetic in the
+//! same order, so each lane equals [`BoxRay::interval`] bit for bit (`tests/simd.rs`).
+
+use std::ops::BitAnd;
+
+use glam::Vec3;
+
+use super::{BoxPack8, GAMMA_3};
+use crate::ray::RayPacket;
+use crate::simd::{F32x8, Mask8, Vec3x8};
+
+/// The rounding a box test allows for: twice the error bound of a slab distance.
+const ALLOWANCE: f32 = 2.0 * GAMMA_3;
+
+/// The latest distance a ray may still be in a box whose computed exit is `t` (or on the
+/// closest hit found at `t`).
+#[inline]
+pub fn widen_exit(t: f32) -> f32 {
+    t * (1.0 + ALLOWANCE)
+}
+
+/// The earliest distance a ray may already be in a box whose computed entry is `t >= 0`.
+#[inline]
+pub fn widen_entry(t: f32) -> f32 {
+    t * (1.0 - ALLOWANCE)
+}
+
+/// Whether a stacked box entered at `entry` lies beyond the closest hit at `limit`, and
+/// so cannot hold a closer hit or a tie: the skip rule of every traversal stack.
+#[inline]
+pub fn beyond(entry: f32, limit: f32) -> bool {
+    entry > widen_exit(limit)
+}
+
+/// [`widen_exit`] lane by lane.
+#[inline(always)]
+fn widen_exit8(t: F32x8) -> F32x8 {
+    t * F32x8::splat(1.0 + ALLOWANCE)
+}
+
+/// `if a > b { a } else { b }`: the `maxps` rule, so a NaN `a` keeps `b`.
+#[inline(always)]
+fn greater(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// `if a < b { a } else { b }`: the `minps` rule, so a NaN `a` keeps `b`.
+#[inline(always)]
+fn lesser(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// One ray set up for box tests.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxRay {
+    origin: Vec3,
+    /// `1 / dir` with infinities clamped to `±f32::MAX`.
+    inv_dir: Vec3,
+}
+
+/// `t` with `±inf` clamped to `±f32::MAX`: `0 * t` is then 0, never NaN.
+#[inline(always)]
+fn clamp_infinite(t: f32) -> f32 {
+    lesser(greater(t, -f32::MAX), f32::MAX)
+}
+
+impl BoxRay {
+    /// The setup of the ray from `origin` with `inv_dir = 1 / dir`.
+    #[inline]
+    pub fn new(origin: Vec3, inv_dir: Vec3) -> Self {
+        BoxRay {
+            origin,
+            inv_dir: Vec3::new(
+                clamp_infinite(inv_dir.x),
+                clamp_infinite(inv_dir.y),
+                clamp_infinite(inv_dir.z),
+            ),
+        }
+    }
+
+    /// The interval `[entry, exit]` in which the ray may be inside the box `[min, max]`
+    /// within `[t_min, t_max]`, its exit widened by the allowance; `None` if it is empty.
+    #[inline]
+    pub fn interval(&self, min: Vec3, max: Vec3, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
+        let mut entry = t_min;
+        let mut exit = t_max;
+        for k in 0..3 {
+            let t1 = (min[k] - self.origin[k]) * self.inv_dir[k];
+            let t2 = (max[k] - self.origin[k]) * self.inv_dir[k];
+            entry = greater(lesser(t1, t2), entry);
+            exit = lesser(greater(t1, t2), exit);
+        }
+        let exit = widen_exit(exit);
+        (entry <= exit).then_some((entry, exit))
+    }
+
+    /// [`BoxRay::interval`] against the eight boxes of a pack (the children of an
+    /// eight-wide node); lanes outside `active` miss. No box value is inert here (NaN
+    /// corners are a slab ignored), so padding must stay outside `active`.
+    #[inline]
+    pub fn intervals8(
+        &self,
+        boxes: &BoxPack8,
+        t_min: f32,
+        t_max: f32,
+        active: Mask8,
+    ) -> Intervals8 {
+        let lanes = Lanes {
+            origin: Vec3x8::splat(self.origin),
+            inv_dir: Vec3x8::splat(self.inv_dir),
+            min: boxes.min,
+            max: boxes.max,
+            t_min: F32x8::splat(t_min),
+            t_max: F32x8::splat(t_max),
+        };
+        lanes.clip() & active
+    }
+}
+
+/// Eight rays set up for box tests together: [`BoxRay`] lane by lane.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxRay8 {
+    origin: Vec3x8,
+    /// `1 / dir` with infinities clamped to `±f32::MAX`, lane by lane.
+    inv_dir: Vec3x8,
+}
+
+impl BoxRay8 {
+    /// The setup of the packet's rays, with the `inv_dir` it holds.
+    #[inline]
+    pub fn new(rays: &RayPacket) -> Self {
+        let clamp = |t: F32x8| t.max(F32x8::splat(-f32::MAX)).min(F32x8::splat(f32::MAX));
+        let inv = rays.inv_dir;
+        BoxRay8 {
+            origin: rays.origin,
+            inv_dir: Vec3x8 {
+                x: clamp(inv.x),
+                y: clamp(inv.y),
+                z: clamp(inv.z),
+            },
+        }
+    }
+
+    /// [`BoxRay::interval`] for each ray against the box `[min, max]` (packet
+    /// traversal); lanes outside `active` miss.
+    #[inline]
+    pub fn interval(
+        &self,
+        min: Vec3,
+        max: Vec3,
+        t_min: F32x8,
+        t_max: F32x8,
+        active: Mask8,
+    ) -> Intervals8 {
+        let lanes = Lanes {
+            origin: self.origin,
+            inv_dir: self.inv_dir,
+            min: Vec3x8::splat(min),
+            max: Vec3x8::splat(max),
+            t_min,
+            t_max,
+        };
+        lanes.clip() & active
+    }
+}
+
+/// Eight intervals: the lanes that hit, and their entries and widened exits (unspecified
+/// in the other lanes).
+#[derive(Clone, Copy, Debug)]
+pub struct Intervals8 {
+    pub hit: Mask8,
+    pub entry: F32x8,
+    pub exit: F32x8,
+}
+
+impl BitAnd<Mask8> for Intervals8 {
+    type Output = Intervals8;
+    /// The intervals of the lanes of `active` only.
+    #[inline(always)]
+    fn bitand(self, active: Mask8) -> Intervals8 {
+        Intervals8 {
+            hit: self.hit & active,
+            ..self
+        }
+    }
+}
+
+/// The operands of [`BoxRay::interval`], lane by lane.
+struct Lanes {
+    origin: Vec3x8,
+    inv_dir: Vec3x8,
+    min: Vec3x8,
+    max: Vec3x8,
+    t_min: F32x8,
+    t_max: F32x8,
+}
+
+impl Lanes {
+    /// The body of [`BoxRay::interval`], axes in the same order, `minps`/`maxps` as
+    /// `lesser`/`greater`.
+    #[inline(always)]
+    fn clip(&self) -> Intervals8 {
+        let t1 = (self.min - self.origin) * self.inv_dir;
+        let t2 = (self.max - self.origin) * self.inv_dir;
+        let mut entry = self.t_min;
+        let mut exit = self.t_max;
+        for (t1, t2) in [(t1.x, t2.x), (t1.y, t2.y), (t1.z, t2.z)] {
+            entry = t1.min(t2).max(entry);
+            exit = t1.max(t2).min(exit);
+        }
+        let exit = widen_exit8(exit);
+        Intervals8 {
+            hit: entry.le(exit),
+            entry,
+            exit,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const INF: f32 = f32::INFINITY;
+
+    fn unit_box(origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
+        BoxRay::new(origin, dir.recip()).interval(Vec3::ZERO, Vec3::ONE, t_min, t_max)
+    }
+
+    #[test]
+    fn entry_and_widened_exit() {
+        let (entry, exit) = unit_box(Vec3::new(0.5, 0.5, -2.0), Vec3::Z, 0.0, INF).unwrap();
+        assert_eq!((entry, exit), (2.0, widen_exit(3.0)));
+        assert!(exit > 3.0);
+        // From inside, the entry is `t_min`; backwards through the `max` face.
+        let inside = unit_box(Vec3::splat(0.5), Vec3::NEG_X, 0.0, INF).unwrap();
+        assert_eq!(inside, (0.0, widen_exit(0.5)));
+        assert_eq!(
+            unit_box(Vec3::new(0.5, 0.5, 3.0), Vec3::NEG_Z, 0.0, INF)
+                .unwrap()
+                .0,
+            2.0
+        );
+        // Behind, beside, and beyond `t_max`.
+        assert_eq!(unit_box(Vec3::new(0.5, 0.5, 2.0), Vec3::Z, 0.0, INF), None);
+        assert_eq!(unit_box(Vec3::new(2.0, 0.5, -2.0), Vec3::Z, 0.0, INF), None);
+        assert_eq!(unit_box(Vec3::new(0.5, 0.5, -2.0), Vec3::Z, 0.0, 1.5), None);
+        assert_eq!(unit_box(Vec3::new(0.5, 0.5, -2.0), Vec3::Z, 0.0, NAN), None);
+    }
+
+    const NAN: f32 = f32::NAN;
+
+    /// A ray running in the plane of a face (zero direction component, origin on the
+    /// face) gets no NaN: it is in the slab from `-inf` (or `t = 0`) to `t = 0` (or
+    /// `inf`), by the sign of its zero. So it passes where that sign points into the
+    /// box, and leaves at 0 where it points out; a ray beside the slab misses either way.
+    #[test]
+    fn a_ray_in_a_face_plane_takes_the_side_its_zero_points_to() {
+        for (face, zero, passes) in [
+            (0.0, 0.0, true),
+            (0.0, -0.0, false),
+            (1.0, -0.0, true),
+            (1.0, 0.0, false),
+        ] {
+            let origin = Vec3::new(face, 0.5, -2.0);
+            let dir = Vec3::new(zero, 0.0, 1.0);
+            let entry = unit_box(origin, dir, 0.0, 10.0).map(|i| i.0);
+            let expected = passes.then_some(2.0);
+            assert_eq!(entry, expected, "face x = {face}, dir.x = {zero:?}");
+            let beside = Vec3::new(face + if face == 0.0 { -0.5 } else { 0.5 }, 0.5, -2.0);
+            assert_eq!(unit_box(beside, dir, 0.0, 10.0), None);
+        }
+    }
+
+    /// The allowance: a box the computed distances put just beside the ray is still
+    /// entered, and a stacked entry just past the closest hit is not skipped.
+    #[test]
+    fn the_allowance_keeps_a_grazing_box() {
+        // Entry and exit computed one float apart the wrong way round.
+        let t = 1e9f32;
+        let (min, max) = (Vec3::new(t.next_up(), -1.0, -1.0), Vec3::new(2e9, 1.0, 1.0));
+        let ray = BoxRay::new(Vec3::ZERO, Vec3::X.recip());
+        assert!(ray.interval(min, max, 0.0, t).is_some());
+        assert!(!beyond(t.next_up(), t));
+        assert!(beyond(2.0 * t, t));
+        assert!(widen_entry(t) < t && widen_exit(t) > t);
+        assert_eq!((widen_entry(0.0), widen_exit(INF)), (0.0, INF));
+    }
+}
