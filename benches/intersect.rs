@@ -8,7 +8,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
 use p3trace::intersect::{self, BoxPack8, BoxRay, BoxRay8, SpherePack8, TrianglePack8};
 use p3trace::ray::{Ray, RayPacket};
-use p3trace::simd::{F32x8, Mask8};
+use p3trace::simd::F32x8;
 
 fn routines(c: &mut Criterion) {
     let hit = Ray::new(Vec3::new(0.1, 0.2, -5.0), Vec3::Z);
@@ -85,7 +85,7 @@ fn packets(c: &mut Criterion) {
     let (bmin, bmax) = (Vec3::splat(-1.0), Vec3::ONE);
 
     c.bench_function("packet/sphere/simd", |b| {
-        b.iter(|| intersect::sphere_packet(black_box(&packet), Vec3::ZERO, 1.0, lo, hi, Mask8::ALL))
+        b.iter(|| intersect::sphere_packet(black_box(&packet), Vec3::ZERO, 1.0, lo, hi, 0xFF))
     });
     c.bench_function("packet/sphere/scalar x8", |b| {
         b.iter(|| {
@@ -93,14 +93,14 @@ fn packets(c: &mut Criterion) {
         })
     });
     c.bench_function("packet/triangle/simd", |b| {
-        b.iter(|| intersect::triangle_packet(black_box(&packet), p0, e1, e2, lo, hi, Mask8::ALL))
+        b.iter(|| intersect::triangle_packet(black_box(&packet), p0, e1, e2, lo, hi, 0xFF))
     });
     c.bench_function("packet/triangle/scalar x8", |b| {
         b.iter(|| black_box(&rays).map(|r| intersect::triangle(&r, p0, e1, e2, 0.0, f32::INFINITY)))
     });
     let box_rays = BoxRay8::new(&packet);
     c.bench_function("packet/box interval/simd", |b| {
-        b.iter(|| black_box(&box_rays).interval(bmin, bmax, lo, hi, Mask8::ALL))
+        b.iter(|| black_box(&box_rays).interval(bmin, bmax, lo, hi))
     });
     // The packet holds its inv_dir; the scalar rays get theirs computed outside the loop.
     let scalar_rays: [BoxRay; 8] = rays.map(|r| BoxRay::new(r.origin, r.dir.recip()));
@@ -175,7 +175,7 @@ fn leaves(c: &mut Criterion) {
     let box_ray = BoxRay::new(ray.origin, inv_dir);
     c.bench_function("leaf/box interval/simd", |b| {
         // The ray runs along z, parallel to x and y.
-        b.iter(|| black_box(&box_ray).intervals8(&box_pack, 0.0, inf, Mask8::ALL))
+        b.iter(|| black_box(&box_ray).intervals8(&box_pack, 0.0, inf))
     });
     c.bench_function("leaf/box interval/scalar x8", |b| {
         b.iter(|| {

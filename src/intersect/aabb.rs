@@ -100,7 +100,7 @@ pub fn aabb_packet(
     max: Vec3,
     t_min: F32x8,
     t_max: F32x8,
-    active: Mask8,
+    active: u8,
 ) -> (Mask8, F32x8) {
     let (hit, t) = aabb_lanes(
         rays.origin,
@@ -110,7 +110,7 @@ pub fn aabb_packet(
         t_min,
         t_max,
     );
-    (hit & active, t)
+    (hit & Mask8::from_bitmask(active), t)
 }
 
 /// [`aabb`] for one ray against the eight boxes of a pack.

@@ -72,7 +72,7 @@ pub fn cone_packet(
     r_apex: f32,
     t_min: F32x8,
     t_max: F32x8,
-    active: Mask8,
+    active: u8,
 ) -> (Mask8, F32x8) {
     let zero = F32x8::ZERO;
     let slope_f = (r_apex - r_base) / height;
@@ -111,7 +111,10 @@ pub fn cone_packet(
     let t_quad = near_on.select(near, far);
 
     let hit = (linear & hit_line) | hit_quad.and_not(linear);
-    (hit & active, linear.select(t_line, t_quad))
+    (
+        hit & Mask8::from_bitmask(active),
+        linear.select(t_line, t_quad),
+    )
 }
 
 /// Outward normal of the cone surface at `p`, the gradient of `|P_perp|^2 - r(s)^2`. At the

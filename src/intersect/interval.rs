@@ -43,8 +43,6 @@
 //! [`BoxRay8::interval`], eight rays against one box) repeat the scalar arithmetic in the
 //! same order, so each lane equals [`BoxRay::interval`] bit for bit (`tests/simd.rs`).
 
-use std::ops::BitAnd;
-
 use glam::Vec3;
 
 use super::{BoxPack8, GAMMA_3};
@@ -145,16 +143,10 @@ impl BoxRay {
     }
 
     /// [`BoxRay::interval`] against the eight boxes of a pack (the children of an
-    /// eight-wide node); lanes outside `active` miss. No box value is inert here (NaN
-    /// corners are a slab ignored), so padding must stay outside `active`.
+    /// eight-wide node), every lane. No box value is inert here (NaN corners are a slab
+    /// ignored), so the caller masks out the padding with the lanes it asks about.
     #[inline]
-    pub fn intervals8(
-        &self,
-        boxes: &BoxPack8,
-        t_min: f32,
-        t_max: f32,
-        active: Mask8,
-    ) -> Intervals8 {
+    pub fn intervals8(&self, boxes: &BoxPack8, t_min: f32, t_max: f32) -> Intervals8 {
         let lanes = Lanes {
             origin: Vec3x8::splat(self.origin),
             inv_dir: Vec3x8::splat(self.inv_dir),
@@ -163,7 +155,7 @@ impl BoxRay {
             t_min: F32x8::splat(t_min),
             t_max: F32x8::splat(t_max),
         };
-        lanes.clip() & active
+        lanes.clip()
     }
 }
 
@@ -192,16 +184,10 @@ impl BoxRay8 {
     }
 
     /// [`BoxRay::interval`] for each ray against the box `[min, max]` (packet
-    /// traversal); lanes outside `active` miss.
+    /// traversal), every lane: the caller keeps the lanes it asks about, so that a node's
+    /// children share one mask operation (a bit `and` on the answer).
     #[inline]
-    pub fn interval(
-        &self,
-        min: Vec3,
-        max: Vec3,
-        t_min: F32x8,
-        t_max: F32x8,
-        active: Mask8,
-    ) -> Intervals8 {
+    pub fn interval(&self, min: Vec3, max: Vec3, t_min: F32x8, t_max: F32x8) -> Intervals8 {
         let lanes = Lanes {
             origin: self.origin,
             inv_dir: self.inv_dir,
@@ -210,7 +196,7 @@ impl BoxRay8 {
             t_min,
             t_max,
         };
-        lanes.clip() & active
+        lanes.clip()
     }
 }
 
@@ -221,18 +207,6 @@ pub struct Intervals8 {
     pub hit: Mask8,
     pub entry: F32x8,
     pub exit: F32x8,
-}
-
-impl BitAnd<Mask8> for Intervals8 {
-    type Output = Intervals8;
-    /// The intervals of the lanes of `active` only.
-    #[inline(always)]
-    fn bitand(self, active: Mask8) -> Intervals8 {
-        Intervals8 {
-            hit: self.hit & active,
-            ..self
-        }
-    }
 }
 
 /// The operands of [`BoxRay::interval`], lane by lane.

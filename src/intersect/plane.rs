@@ -23,12 +23,13 @@ pub fn plane_packet(
     offset: f32,
     t_min: F32x8,
     t_max: F32x8,
-    active: Mask8,
+    active: u8,
 ) -> (Mask8, F32x8) {
     let normal = Vec3x8::splat(normal);
     let denom = normal.dot(rays.dir);
     let t = (F32x8::splat(offset) - normal.dot(rays.origin)) / denom;
     let hit = t.gt(t_min) & t.lt(t_max);
+    let active = Mask8::from_bitmask(active);
     (active.and_not(denom.eq(F32x8::ZERO)) & hit, t)
 }
 

@@ -66,7 +66,7 @@ pub fn sphere_packet(
     radius: f32,
     t_min: F32x8,
     t_max: F32x8,
-    active: Mask8,
+    active: u8,
 ) -> (Mask8, F32x8) {
     let (hit, t) = sphere_lanes(
         rays.origin,
@@ -76,7 +76,7 @@ pub fn sphere_packet(
         t_min,
         t_max,
     );
-    (hit & active, t)
+    (hit & Mask8::from_bitmask(active), t)
 }
 
 /// [`sphere`] for one ray against the eight spheres of a pack.

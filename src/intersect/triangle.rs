@@ -99,7 +99,7 @@ pub fn triangle_packet(
     e2: Vec3,
     t_min: F32x8,
     t_max: F32x8,
-    active: Mask8,
+    active: u8,
 ) -> TriangleHit8 {
     let mut hits = triangle_lanes(
         rays.origin,
@@ -110,7 +110,7 @@ pub fn triangle_packet(
         t_min,
         t_max,
     );
-    hits.hit = hits.hit & active;
+    hits.hit = hits.hit & Mask8::from_bitmask(active);
     hits
 }
 

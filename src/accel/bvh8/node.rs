@@ -2,7 +2,6 @@
 //! encoding of a reference to a node or to a leaf.
 
 use crate::intersect::{BoxPack8, BoxRay};
-use crate::simd::Mask8;
 
 /// Children per node.
 pub const WIDTH: usize = 8;
@@ -55,8 +54,8 @@ impl Node8 {
     /// their entry distances (lanes outside the mask are unspecified).
     #[inline]
     pub fn entries(&self, ray: &BoxRay, t_min: f32, t_max: f32) -> (u8, [f32; WIDTH]) {
-        let used = Mask8::from_bitmask(((1u32 << self.count) - 1) as u8);
-        let intervals = ray.intervals8(&self.boxes, t_min, t_max, used);
-        (intervals.hit.bitmask(), intervals.entry.to_array())
+        let used = ((1u32 << self.count) - 1) as u8;
+        let intervals = ray.intervals8(&self.boxes, t_min, t_max);
+        (intervals.hit.bitmask() & used, intervals.entry.to_array())
     }
 }

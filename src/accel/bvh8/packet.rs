@@ -9,7 +9,7 @@ use crate::accel::stack::Stack;
 use crate::intersect::{beyond, BoxRay8};
 use crate::ray::RayPacket;
 use crate::scene::Geometry;
-use crate::simd::{F32x8, Mask8};
+use crate::simd::F32x8;
 
 /// A packet whose lanes in a subtree drop to this many finishes it one ray at a time.
 const SINGLE_RAY_LANES: u32 = 2;
@@ -70,14 +70,13 @@ impl Bvh8 {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let mask = Mask8::from_bitmask(lanes);
             let boxes = node.boxes.corners();
             // (child, its lanes, the nearest lane's entry), for the children entered.
             let mut entered = [(0u32, 0u8, 0f32); WIDTH];
             let mut count = 0;
             for (c, &(min, max)) in boxes.iter().enumerate().take(node.count as usize) {
-                let intervals = box_rays.interval(min, max, lanes_t_min, limit, mask);
-                let hit = intervals.hit.bitmask();
+                let intervals = box_rays.interval(min, max, lanes_t_min, limit);
+                let hit = intervals.hit.bitmask() & lanes;
                 if hit != 0 {
                     let t = intervals.entry.to_array();
                     let mut nearest = f32::INFINITY;
@@ -129,11 +128,10 @@ impl Bvh8 {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let mask = Mask8::from_bitmask(lanes);
             let boxes = node.boxes.corners();
             for (c, &(min, max)) in boxes.iter().enumerate().take(node.count as usize) {
-                let intervals = box_rays.interval(min, max, lanes_t_min, lanes_t_max, mask);
-                let hit = intervals.hit.bitmask();
+                let intervals = box_rays.interval(min, max, lanes_t_min, lanes_t_max);
+                let hit = intervals.hit.bitmask() & lanes;
                 if hit != 0 {
                     stack.push((node.child[c], hit));
                 }
