@@ -1,3 +1,7 @@
+//! The cone and cylinder kind: its storage ([`Cones`]), the ray test of an open frustum
+//! and its packet twin (eight rays against one cone; cones are rare, so no leaf pack),
+//! and the normal.
+
 use glam::Vec3;
 
 use super::{max_num, packet_hits, packet_interval, Aabb, Shapes, TriangleHit, Vec3s};

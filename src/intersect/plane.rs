@@ -1,3 +1,6 @@
+//! The plane kind, the one unbounded kind: its storage ([`Planes`]), the ray-plane test
+//! and its packet twin. No structure holds planes; `Tracer` tests them beside it.
+
 use glam::Vec3;
 
 use super::{packet_hits, packet_interval, Aabb, Shapes, TriangleHit, Vec3s};

@@ -1,3 +1,6 @@
+//! The sphere kind: its storage ([`Spheres`]), the ray-sphere test and its SIMD twins
+//! (eight rays against one sphere; one ray against a [`SpherePack8`] of a BVH leaf).
+
 use glam::Vec3;
 
 use super::{first_root_in, first_root_in8};

@@ -1,3 +1,7 @@
+//! The triangle kind: its storage ([`Triangles`]: a vertex and two edges, optional vertex
+//! normals), Möller-Trumbore and its SIMD twins (eight rays against one triangle; one ray
+//! against a [`TrianglePack8`] of a BVH leaf).
+
 use glam::Vec3;
 
 use super::{packet_interval, Aabb, Shapes, Vec3s};
