@@ -189,12 +189,8 @@ pub struct Boxes {
 }
 
 impl Shapes for Boxes {
-    fn len(&self) -> usize {
-        self.material.len()
-    }
-
-    fn material(&self, i: usize) -> u32 {
-        self.material[i]
+    fn materials(&self) -> &[u32] {
+        &self.material
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {

@@ -144,12 +144,8 @@ pub struct Cones {
 }
 
 impl Shapes for Cones {
-    fn len(&self) -> usize {
-        self.material.len()
-    }
-
-    fn material(&self, i: usize) -> u32 {
-        self.material[i]
+    fn materials(&self) -> &[u32] {
+        &self.material
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {

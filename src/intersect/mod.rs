@@ -48,13 +48,20 @@ use crate::simd::{F32x8, Mask8};
 /// The storage of one primitive kind, and what the layers above ask of a primitive `i`
 /// of it. Implemented in the kind's own file; [`crate::scene::Geometry`] dispatches to it.
 pub trait Shapes {
-    fn len(&self) -> usize;
+    /// Each primitive's material, one entry per primitive: it also counts them.
+    fn materials(&self) -> &[u32];
+
+    fn len(&self) -> usize {
+        self.materials().len()
+    }
 
     fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
-    fn material(&self, i: usize) -> u32;
+    fn material(&self, i: usize) -> u32 {
+        self.materials()[i]
+    }
 
     /// The tight box, over the whole `shutter` for moving primitives; all of space for an
     /// unbounded kind (which no structure holds).

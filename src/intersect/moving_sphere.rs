@@ -32,12 +32,8 @@ impl MovingSpheres {
 }
 
 impl Shapes for MovingSpheres {
-    fn len(&self) -> usize {
-        self.radius.len()
-    }
-
-    fn material(&self, i: usize) -> u32 {
-        self.material[i]
+    fn materials(&self) -> &[u32] {
+        &self.material
     }
 
     /// The centre moves on a line, so the boxes at the shutter's two ends cover the path.

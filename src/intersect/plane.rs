@@ -45,12 +45,8 @@ pub struct Planes {
 }
 
 impl Shapes for Planes {
-    fn len(&self) -> usize {
-        self.material.len()
-    }
-
-    fn material(&self, i: usize) -> u32 {
-        self.material[i]
+    fn materials(&self) -> &[u32] {
+        &self.material
     }
 
     /// All of space: planes are unbounded, and no structure holds them.

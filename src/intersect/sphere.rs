@@ -148,12 +148,8 @@ pub(super) fn sphere_bounds(centre: Vec3, radius: f32) -> Aabb {
 }
 
 impl Shapes for Spheres {
-    fn len(&self) -> usize {
-        self.radius.len()
-    }
-
-    fn material(&self, i: usize) -> u32 {
-        self.material[i]
+    fn materials(&self) -> &[u32] {
+        &self.material
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {

@@ -211,12 +211,8 @@ impl Triangles {
 }
 
 impl Shapes for Triangles {
-    fn len(&self) -> usize {
-        self.material.len()
-    }
-
-    fn material(&self, i: usize) -> u32 {
-        self.material[i]
+    fn materials(&self) -> &[u32] {
+        &self.material
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {
