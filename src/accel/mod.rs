@@ -54,7 +54,7 @@ pub enum BvhWidth {
 
 /// The SAH tree is collapsed to 8-wide nodes; the report's BVH stays binary, as the
 /// report traverses it.
-pub fn default_width(build: BvhBuild) -> BvhWidth {
+fn default_width(build: BvhBuild) -> BvhWidth {
     match build {
         BvhBuild::Midpoint => BvhWidth::Two,
         BvhBuild::Sah => BvhWidth::Eight,
