@@ -6,9 +6,9 @@
 use arbitrary::Arbitrary;
 use glam::Vec3;
 use libfuzzer_sys::fuzz_target;
-use p3trace::accel::{BvhBuild, BvhWidth};
 use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
-use p3trace::ray::{Hit, Ray};
+use p3trace::accel::{BvhBuild, BvhWidth};
+use p3trace::ray::{Hit, Ray, RayPacket};
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::p3f::{parse_text, MAX_MAGNITUDE};
 use p3trace::scene::CameraSpec;
@@ -224,18 +224,21 @@ fuzz_target!(|input: Input| {
             let lanes: [(Ray, f32); 8] = std::array::from_fn(|k| chunk[k % chunk.len()]);
             let packet = lanes.map(|(ray, _)| ray);
             let t_max = lanes.map(|(_, t)| t);
-            let hits = tracer.closest_packet(&packet, input.active, t_max[0]);
-            let blocked = tracer.occluded_packet(&packet, &t_max, input.active);
+            let query = RayPacket::new(&packet)
+                .with_t_max(t_max)
+                .with_active(input.active);
+            let hits = tracer.closest_packet(&query);
+            let blocked = tracer.occluded_packet(&query);
             for k in 0..8 {
                 let on = input.active & (1 << k) != 0;
                 let expected = on
-                    .then(|| brute.closest(&packet[k], 0.0, t_max[0]))
+                    .then(|| brute.closest(&packet[k], 0.0, t_max[k]))
                     .flatten();
                 assert!(
                     same(hits[k], expected),
                     "{name} lane {k} closest {:?} {}: {:?} against {expected:?}\n{text}",
                     packet[k],
-                    t_max[0],
+                    t_max[k],
                     hits[k]
                 );
                 let expected = on && brute.occluded(&packet[k], 0.0, t_max[k]);
