@@ -54,8 +54,9 @@ const SIDES: [u32; 3] = [250, 200, 200];
 const SPHERES: usize = 10_000_000;
 
 /// The most heap a sphere may take at the peak of storing, building the default BVH and
-/// rendering, as the README states it (349 measured: 34 for the sphere arrays as they
-/// grow, the rest the SAH build's items, its binary nodes and the 8-wide tree).
+/// rendering, as the README states it (240 measured: 34 for the sphere arrays as they
+/// grow, the rest the SAH build's items and its binary nodes, which the 8-wide tree's
+/// conversion frees).
 const MAX_BYTES_PER_SPHERE: f64 = 400.0;
 
 #[test]
