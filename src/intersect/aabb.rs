@@ -218,14 +218,14 @@ impl Shapes for Boxes {
         t_max: &[f32; 8],
         active: u8,
     ) -> [Option<TriangleHit>; 8] {
-        let (lo, hi, mask) = packet_interval(packet.t_min, t_max, active);
+        let (lo, hi) = packet_interval(packet.t_min, t_max);
         packet_hits(aabb_packet(
             packet,
             self.min.get(i),
             self.max.get(i),
             lo,
             hi,
-            mask,
+            active,
         ))
     }
 

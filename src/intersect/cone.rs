@@ -188,7 +188,7 @@ impl Shapes for Cones {
         t_max: &[f32; 8],
         active: u8,
     ) -> [Option<TriangleHit>; 8] {
-        let (lo, hi, mask) = packet_interval(packet.t_min, t_max, active);
+        let (lo, hi) = packet_interval(packet.t_min, t_max);
         packet_hits(cone_packet(
             packet,
             self.base.get(i),
@@ -198,7 +198,7 @@ impl Shapes for Cones {
             self.r_apex[i],
             lo,
             hi,
-            mask,
+            active,
         ))
     }
 

@@ -142,9 +142,9 @@ fn packet_hits((hit, t): (Mask8, F32x8)) -> [Option<TriangleHit>; 8] {
     })
 }
 
-/// Packet kernel arguments from the per-lane form of [`Shapes::intersect_packet`].
-fn packet_interval(t_min: f32, t_max: &[f32; 8], active: u8) -> (F32x8, F32x8, u8) {
-    (F32x8::splat(t_min), F32x8::from_array(*t_max), active)
+/// The packet kernels' interval lanes from the form [`Shapes::intersect_packet`] takes.
+fn packet_interval(t_min: f32, t_max: &[f32; 8]) -> (F32x8, F32x8) {
+    (F32x8::splat(t_min), F32x8::from_array(*t_max))
 }
 
 /// The relative error bound of three rounded operations, `3 u / (1 - 3 u)` with `u` the

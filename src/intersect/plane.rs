@@ -75,14 +75,14 @@ impl Shapes for Planes {
         t_max: &[f32; 8],
         active: u8,
     ) -> [Option<TriangleHit>; 8] {
-        let (lo, hi, mask) = packet_interval(packet.t_min, t_max, active);
+        let (lo, hi) = packet_interval(packet.t_min, t_max);
         packet_hits(plane_packet(
             packet,
             self.normal.get(i),
             self.offset[i],
             lo,
             hi,
-            mask,
+            active,
         ))
     }
 

@@ -175,14 +175,14 @@ impl Shapes for Spheres {
         t_max: &[f32; 8],
         active: u8,
     ) -> [Option<TriangleHit>; 8] {
-        let (lo, hi, mask) = packet_interval(packet.t_min, t_max, active);
+        let (lo, hi) = packet_interval(packet.t_min, t_max);
         packet_hits(sphere_packet(
             packet,
             self.centre.get(i),
             self.radius[i],
             lo,
             hi,
-            mask,
+            active,
         ))
     }
 

@@ -249,7 +249,7 @@ impl Shapes for Triangles {
         t_max: &[f32; 8],
         active: u8,
     ) -> [Option<TriangleHit>; 8] {
-        let (lo, hi, mask) = packet_interval(packet.t_min, t_max, active);
+        let (lo, hi) = packet_interval(packet.t_min, t_max);
         let h = triangle_packet(
             packet,
             self.p0.get(i),
@@ -257,7 +257,7 @@ impl Shapes for Triangles {
             self.e2.get(i),
             lo,
             hi,
-            mask,
+            active,
         );
         let (hit, t, u, v) = (
             h.hit.bitmask(),
