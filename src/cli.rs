@@ -249,10 +249,11 @@ pub struct BenchArgs {
 /// The acceleration structure (P3F.md section 9).
 #[derive(Args, Debug)]
 pub struct AccelArgs {
-    /// Acceleration structure. Default: the file's `accel` line (0 none, 1 grid, 2 bvh),
-    /// else bvh.
-    #[arg(long, value_enum, value_name = "KIND")]
-    pub accel: Option<AccelChoice>,
+    /// Acceleration structure. Every structure gives the same image; `auto` takes the
+    /// fastest (the 8-wide SAH BVH) whatever the file says, `file` follows the file's
+    /// `accel` line (0 none, 1 grid, 2 bvh; the BVH without one).
+    #[arg(long, value_enum, value_name = "KIND", default_value_t = AccelChoice::Auto)]
+    pub accel: AccelChoice,
     /// How the BVH is built: sah (binned surface area heuristic, fast) or midpoint (the
     /// course report's: longest-axis midpoint, leaves of at most two objects).
     #[arg(long, value_enum, value_name = "BUILD", default_value_t = BvhChoice::Sah)]
@@ -279,6 +280,10 @@ pub enum ModeChoice {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum AccelChoice {
+    /// The fastest structure, whatever the file says (today the BVH).
+    Auto,
+    /// The file's `accel` line (the course files say 0: brute force).
+    File,
     /// Brute force: every object against every ray.
     None,
     /// The report's uniform grid with 3D-DDA traversal.

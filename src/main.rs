@@ -163,24 +163,20 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The structure the command line asks for, else the file's, else the BVH; with a note
-/// on stderr when the file's `accel 0` would make a large scene slow.
+/// The structure the command line asks for (by default the fastest); with `--accel
+/// file`, the file's, with a note on stderr when its `accel 0` makes a large scene slow.
 fn accel_options(scene: &Scene, args: &AccelArgs) -> AccelOptions {
-    let kind = match args.accel {
-        Some(choice) => accel_kind(choice),
-        None => {
-            let objects = scene.geometry.bounded_count();
-            if scene.accel == Some(AccelKind::None) && objects > SLOW_WITHOUT_ACCEL {
-                eprintln!(
-                    "p3trace: note: {} asks for no acceleration structure ('accel 0') over \
-                     {objects} objects; --accel bvh would be much faster",
-                    scene.name
-                );
-            }
-            scene.accel.unwrap_or(AccelKind::Bvh)
+    if args.accel == AccelChoice::File {
+        let objects = scene.geometry.bounded_count();
+        if scene.accel == Some(AccelKind::None) && objects > SLOW_WITHOUT_ACCEL {
+            eprintln!(
+                "p3trace: note: {} asks for no acceleration structure ('accel 0') over \
+                 {objects} objects; --accel auto would be much faster",
+                scene.name
+            );
         }
-    };
-    structure_options(kind, args)
+    }
+    structure_options(accel_kind(args.accel, scene), args)
 }
 
 /// The options of structure `kind`, with the build settings of `args`.
@@ -201,8 +197,11 @@ fn structure_options(kind: AccelKind, args: &AccelArgs) -> AccelOptions {
     }
 }
 
-fn accel_kind(choice: AccelChoice) -> AccelKind {
+/// The structure `choice` names for `scene`.
+fn accel_kind(choice: AccelChoice, scene: &Scene) -> AccelKind {
     match choice {
+        AccelChoice::Auto => AccelKind::Bvh,
+        AccelChoice::File => scene.accel.unwrap_or(AccelKind::Bvh),
         AccelChoice::None => AccelKind::None,
         AccelChoice::Grid => AccelKind::Grid,
         AccelChoice::Bvh => AccelKind::Bvh,
@@ -293,10 +292,7 @@ fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
 fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     use p3trace::bench;
     let scene = load_scene(&args.scene)?;
-    // A benchmark times a structure: the file's `accel` line (brute force in every
-    // course file) is not a choice made for it, so the default is the BVH.
-    let kind = args.accel.accel.map_or(AccelKind::Bvh, accel_kind);
-    let options = structure_options(kind, &args.accel);
+    let options = structure_options(accel_kind(args.accel.accel, &scene), &args.accel);
     let (accel, build_time) = Accel::build(&scene.geometry, &options);
     let name = accel.name();
     let tracer = p3trace::accel::Tracer::new(&scene.geometry, accel);

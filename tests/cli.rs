@@ -165,6 +165,33 @@ fn info_lists_objects_lights_and_camera() {
     );
 }
 
+/// A course file says `accel 0`; rendered without `--accel`, it gets the BVH, and the
+/// image equals brute force's (every structure gives the same image).
+#[test]
+fn course_scene_renders_with_the_bvh_by_default() {
+    let Some(shared) = common::shared() else {
+        return;
+    };
+    let scene = shared.join("scenes/balls_medium.p3f");
+    let scene = scene.to_str().unwrap();
+    assert!(stdout(&p3trace(&["info", scene])).contains("accel (file): none"));
+    let dir = scratch("cli_default_accel");
+    let render = |out: &str, extra: &[&str]| {
+        let out = dir.join(out);
+        let mut args = vec!["render", scene, "-o", out.to_str().unwrap()];
+        args.extend_from_slice(&["--resolution", "48x48", "--stats"]);
+        args.extend_from_slice(extra);
+        let run = p3trace(&args);
+        assert!(run.status.success(), "{}", stderr(&run));
+        (stdout(&run), std::fs::read(out).unwrap())
+    };
+    let (stats, default) = render("default.png", &[]);
+    assert!(stats.starts_with("bvh sah: built in"), "{stats}");
+    let (stats, brute) = render("file.png", &["--accel", "file"]);
+    assert!(stats.starts_with("none: built in"), "{stats}");
+    assert!(default == brute, "the default structure changed the image");
+}
+
 #[test]
 fn compare_reports_and_exits_by_tolerance() {
     let dir = scratch("cli_compare");
@@ -285,11 +312,30 @@ fn accel_choice_notes_and_statistics() {
         args.extend_from_slice(extra);
         p3trace(&args)
     };
-    let asked_none = render(&[]);
+    // By default the fastest structure, whatever the file's `accel 0` says.
+    let default = render(&["--stats"]);
+    assert!(default.status.success(), "{}", stderr(&default));
+    assert!(
+        stdout(&default).starts_with("bvh sah: built in"),
+        "{}",
+        stdout(&default)
+    );
+    assert!(
+        !stderr(&default).contains("much faster"),
+        "{}",
+        stderr(&default)
+    );
+    // `--accel file` follows it, and says what that costs.
+    let asked_none = render(&["--accel", "file", "--stats"]);
     assert!(asked_none.status.success(), "{}", stderr(&asked_none));
     assert!(
+        stdout(&asked_none).starts_with("none: built in"),
+        "{}",
+        stdout(&asked_none)
+    );
+    assert!(
         stderr(&asked_none)
-            .contains("'accel 0') over 822 objects; --accel bvh would be much faster"),
+            .contains("'accel 0') over 822 objects; --accel auto would be much faster"),
         "{}",
         stderr(&asked_none)
     );
