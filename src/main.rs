@@ -34,6 +34,13 @@ enum Failure {
 const INTERRUPTED: i32 = 130;
 
 fn main() -> ExitCode {
+    // A closed pipe ends the program quietly, as it does other command-line tools: Rust
+    // ignores SIGPIPE, so every `println!` into a closed pipe would panic instead.
+    #[cfg(unix)]
+    // SAFETY: restoring a signal's default action, before any other thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     // On Ctrl-C, SIGTERM or SIGHUP, remove the file being written, if any, and leave.
     // Should the handler fail to install, the signals keep their default action: the
     // target is still never truncated, but a `.partial` file may stay.
@@ -63,8 +70,18 @@ fn main() -> ExitCode {
     }
 }
 
+/// Reads and parses the scene at `path`: a file that cannot be read is an I/O failure
+/// (exit 1), a bad scene a usage one (exit 2, at its `file:line:col`).
 fn load_scene(path: &Path) -> Result<Scene, Failure> {
-    let scene = scene::parse_file(path).map_err(|e| Failure::Usage(e.to_string()))?;
+    let bytes = std::fs::read(path).map_err(|e| {
+        // "No such file or directory (os error 2)": the reason, without its number.
+        let reason = e.to_string();
+        let reason = reason.split(" (os error").next().unwrap_or_default();
+        Failure::Run(format!("cannot read '{}': {reason}", path.display()))
+    })?;
+    let base_dir = path.parent().unwrap_or(Path::new(""));
+    let scene = scene::p3f::parse_bytes(&bytes, &path.display().to_string(), base_dir)
+        .map_err(|e| Failure::Usage(e.to_string()))?;
     for w in &scene.warnings {
         eprintln!(
             "{}:{}:{}: warning: {}",

@@ -97,10 +97,6 @@ fn bad_usage_and_bad_scenes_exit_2_with_a_message() {
         vec!["render".into(), showcase(), "--threads".into(), "0".into()],
         vec!["render".into(), showcase(), "--bogus".into()],
         vec!["render".into(), showcase(), "-o".into(), "x.gif".into()],
-        vec![
-            "render".into(),
-            dir.join("missing.p3f").display().to_string(),
-        ],
         vec!["info".into(), bad.display().to_string()],
         vec![
             "render".into(),
@@ -428,6 +424,50 @@ fn renders_the_random_scene_and_checks_effect_flags() {
         assert!(
             stderr(&run).contains(message),
             "{flags:?}: {}",
+            stderr(&run)
+        );
+    }
+}
+
+/// A scene file that cannot be read is an I/O failure (exit 1), named with the reason.
+#[test]
+fn a_missing_scene_file_says_why_and_exits_1() {
+    let dir = scratch("cli_missing");
+    let missing = dir.join("nofile.p3f");
+    for command in ["render", "info", "bench"] {
+        let run = p3trace(&[command, missing.to_str().unwrap()]);
+        assert_eq!(run.status.code(), Some(1), "{command}: {}", stderr(&run));
+        assert_eq!(
+            stderr(&run),
+            format!(
+                "p3trace: error: cannot read '{}': No such file or directory\n",
+                missing.display()
+            ),
+            "{command}"
+        );
+    }
+}
+
+/// Output into a closed pipe (`p3trace info SCENE | head -1`) ends the program quietly:
+/// no panic message, no exit status 101.
+#[test]
+fn a_closed_pipe_ends_the_output_quietly() {
+    use std::process::{Command, Stdio};
+    let scene = common::project_file("scenes/showcase.p3f");
+    for args in [vec!["info", scene.to_str().unwrap()], vec!["gen", "random"]] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_p3trace"))
+            .args(&args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // The reading end closes before the program has written anything.
+        drop(child.stdout.take());
+        let run = child.wait_with_output().unwrap();
+        assert_ne!(run.status.code(), Some(101), "{args:?}: {}", stderr(&run));
+        assert!(
+            !stderr(&run).contains("panicked"),
+            "{args:?}: {}",
             stderr(&run)
         );
     }
