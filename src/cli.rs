@@ -223,8 +223,8 @@ pub struct RenderArgs {
     /// No progress bar and no closing statistics line (warnings still go to stderr).
     #[arg(short, long)]
     pub quiet: bool,
-    /// Also print the structure's build time and statistics.
-    #[arg(long, conflicts_with = "quiet")]
+    /// Also print the structure's build time and statistics (with --quiet, only them).
+    #[arg(long)]
     pub stats: bool,
     #[command(flatten)]
     pub accel: AccelArgs,

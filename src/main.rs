@@ -70,6 +70,19 @@ fn main() -> ExitCode {
     }
 }
 
+/// `n` with its digits in groups of three: `2,230,114`.
+fn grouped(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, digit) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(digit);
+    }
+    out
+}
+
 /// Reads and parses the scene at `path`: a file that cannot be read is an I/O failure
 /// (exit 1), a bad scene a usage one (exit 2, at its `file:line:col`).
 fn load_scene(path: &Path) -> Result<Scene, Failure> {
@@ -166,13 +179,13 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     if !args.quiet {
         let seconds = report.elapsed.as_secs_f64();
         println!(
-            "{}: {}x{}, {} spp, {:.3} s, {:.2} M rays, {:.2} Mrays/s -> {}",
+            "{}: {}x{}, {} spp, {:.3} s, {} rays, {:.2} Mrays/s -> {}",
             scene.name,
             options.width,
             options.height,
             options.sampling.samples_per_pixel(),
             seconds,
-            report.rays as f64 / 1e6,
+            grouped(report.rays),
             report.rays as f64 / 1e6 / seconds.max(1e-9),
             output.display()
         );

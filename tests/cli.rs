@@ -472,3 +472,35 @@ fn a_closed_pipe_ends_the_output_quietly() {
         );
     }
 }
+
+/// The closing line counts rays exactly, in groups of three digits; `--stats --quiet`
+/// prints the statistics alone.
+#[test]
+fn the_closing_line_counts_rays_exactly_and_stats_combine_with_quiet() {
+    let dir = scratch("cli_ray_count");
+    // No objects: one primary ray a pixel, 1,200 in all.
+    let scene = dir.join("empty.p3f");
+    std::fs::write(
+        &scene,
+        "v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 0.01\nresolution 40 30\n",
+    )
+    .unwrap();
+    let out = dir.join("empty.png");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let run = p3trace(&args);
+        assert!(run.status.success(), "{}", stderr(&run));
+        stdout(&run)
+    };
+    let line = run(&[]);
+    assert!(line.contains(", 1,200 rays, "), "{line}");
+    let stats = run(&["--stats", "--quiet"]);
+    assert!(stats.starts_with("bvh sah: built in"), "{stats}");
+    assert!(!stats.contains(" rays, "), "{stats}");
+}
