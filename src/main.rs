@@ -86,15 +86,10 @@ fn grouped(n: u64) -> String {
 /// Reads and parses the scene at `path`: a file that cannot be read is an I/O failure
 /// (exit 1), a bad scene a usage one (exit 2, at its `file:line:col`).
 fn load_scene(path: &Path) -> Result<Scene, Failure> {
-    let bytes = std::fs::read(path).map_err(|e| {
-        // "No such file or directory (os error 2)": the reason, without its number.
-        let reason = e.to_string();
-        let reason = reason.split(" (os error").next().unwrap_or_default();
-        Failure::Run(format!("cannot read '{}': {reason}", path.display()))
+    let scene = scene::parse_file(path).map_err(|e| match e {
+        scene::FileError::Read(message) => Failure::Run(message),
+        scene::FileError::Parse(e) => Failure::Usage(e.to_string()),
     })?;
-    let base_dir = path.parent().unwrap_or(Path::new(""));
-    let scene = scene::p3f::parse_bytes(&bytes, &path.display().to_string(), base_dir)
-        .map_err(|e| Failure::Usage(e.to_string()))?;
     for w in &scene.warnings {
         eprintln!(
             "{}:{}:{}: warning: {}",

@@ -61,6 +61,20 @@ fn default_width(build: BvhBuild) -> BvhWidth {
     }
 }
 
+/// `bvh midpoint` or `bvh sah`, with the width when it is not the build's default
+/// (`bvh sah binary`, `bvh midpoint 8-wide`).
+fn bvh_name(build: BvhBuild, width: BvhWidth) -> String {
+    let name = match build {
+        BvhBuild::Midpoint => "bvh midpoint",
+        BvhBuild::Sah => "bvh sah",
+    };
+    match width {
+        _ if width == default_width(build) => name.into(),
+        BvhWidth::Two => format!("{name} binary"),
+        BvhWidth::Eight => format!("{name} 8-wide"),
+    }
+}
+
 /// How to build the structure.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AccelOptions {
@@ -123,8 +137,8 @@ impl Accel {
         match self {
             Accel::None => "none".into(),
             Accel::Grid(g) => g.name(),
-            Accel::Bvh2(b) => b.name(),
-            Accel::Bvh8(b) => b.name(),
+            Accel::Bvh2(b) => bvh_name(b.build_kind(), BvhWidth::Two),
+            Accel::Bvh8(b) => bvh_name(b.build_kind(), BvhWidth::Eight),
         }
     }
 
@@ -133,8 +147,8 @@ impl Accel {
         match self {
             Accel::None => vec![],
             Accel::Grid(g) => g.stats(),
-            Accel::Bvh2(b) => b.stats().lines(&b.name()),
-            Accel::Bvh8(b) => b.stats(),
+            Accel::Bvh2(b) => b.stats().lines(&self.name()),
+            Accel::Bvh8(b) => b.stats(&self.name()),
         }
     }
 }

@@ -28,8 +28,8 @@
 //! **NaN convention.** Only NaN corners (the padding of a pack) or a NaN `t_min` or
 //! `t_max` give NaN. The clipping, `if t > entry { t } else { entry }` and
 //! `if t < exit { t } else { exit }` (`maxps`/`minps`), keeps the clipped end when `t` is
-//! NaN, so padding boxes are entered and stay outside the `active` mask; a NaN `t_min` or
-//! `t_max` is a miss.
+//! NaN, so padding boxes are entered and their callers leave them out of the lanes they
+//! keep; a NaN `t_min` or `t_max` is a miss.
 //!
 //! **The allowance.** Each slab distance `(corner - origin) * inv_dir` is off by up to
 //! `GAMMA_3` of itself, the entry one way and the exit the other, so the exit is widened

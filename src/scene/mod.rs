@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use glam::Vec3;
 
 pub use geometry::Geometry;
-pub use p3f::{parse_file, parse_str, ParseError};
+pub use p3f::{parse_file, parse_str, FileError, ParseError};
 
 /// `f Rd Gd Bd Kd Rs Gs Bs Ks Shine T ior` (P3F.md section 5).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -41,17 +41,36 @@ impl fmt::Display for ParseError {
 
 impl std::error::Error for ParseError {}
 
+/// Why a scene file gave no scene: it could not be read (an I/O failure, with no position
+/// in it), or its text is not a valid scene.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FileError {
+    /// `cannot read 'x.p3f': No such file or directory`.
+    Read(String),
+    Parse(ParseError),
+}
+
+impl fmt::Display for FileError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            FileError::Read(message) => f.write_str(message),
+            FileError::Parse(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for FileError {}
+
 /// Reads and parses a P3F file. `env` folders are resolved against the file's folder.
-pub fn parse_file(path: &Path) -> Result<Scene> {
+pub fn parse_file(path: &Path) -> std::result::Result<Scene, FileError> {
     let name = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| ParseError {
-        file: name.clone(),
-        line: 0,
-        column: 0,
-        directive: None,
-        message: format!("cannot read the file: {e}"),
+    let bytes = std::fs::read(path).map_err(|e| {
+        // "No such file or directory (os error 2)": the reason, without its number.
+        let reason = e.to_string();
+        let reason = reason.split(" (os error").next().unwrap_or_default();
+        FileError::Read(format!("cannot read '{name}': {reason}"))
     })?;
-    parse_bytes(&bytes, &name, path.parent().unwrap_or(Path::new("")))
+    parse_bytes(&bytes, &name, path.parent().unwrap_or(Path::new(""))).map_err(FileError::Parse)
 }
 
 /// Parses the bytes of a P3F file, which must be UTF-8 text; `name` and `base_dir` as

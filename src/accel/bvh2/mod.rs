@@ -164,22 +164,6 @@ impl Bvh2 {
         (self.nodes, self.prims)
     }
 
-    /// `bvh midpoint` or `bvh sah`: the build's name.
-    pub fn build_name(build: BvhBuild) -> &'static str {
-        match build {
-            BvhBuild::Midpoint => "bvh midpoint",
-            BvhBuild::Sah => "bvh sah",
-        }
-    }
-
-    /// The build's name, with `binary` when the build is usually collapsed to 8-wide.
-    pub fn name(&self) -> String {
-        match self.build {
-            BvhBuild::Midpoint => Self::build_name(self.build).into(),
-            BvhBuild::Sah => format!("{} binary", Self::build_name(self.build)),
-        }
-    }
-
     pub fn closest(
         &self,
         geometry: &Geometry,

@@ -15,7 +15,7 @@ mod node;
 mod packet;
 mod traverse;
 
-use super::bvh2::{Bvh2, Bvh2Stats, BvhBuild};
+use super::bvh2::{Bvh2Stats, BvhBuild};
 use crate::intersect::{SpherePack8, TrianglePack8};
 use crate::prim::PrimId;
 use node::{Node8, WIDTH};
@@ -42,18 +42,15 @@ pub struct Bvh8 {
 const STACK_SIZE: usize = (WIDTH - 1) * super::bvh2::MAX_DEPTH + 1;
 
 impl Bvh8 {
-    /// `bvh sah`, or `bvh midpoint 8-wide` (the report's tree is binary by default).
-    pub fn name(&self) -> String {
-        let build = Bvh2::build_name(self.build);
-        match self.build {
-            BvhBuild::Sah => build.into(),
-            BvhBuild::Midpoint => format!("{build} 8-wide"),
-        }
+    /// The build the binary tree it was collapsed from ran.
+    pub fn build_kind(&self) -> BvhBuild {
+        self.build
     }
 
-    /// The binary tree's statistics, then the 8-wide tree's, one `name: value` per line.
-    pub fn stats(&self) -> Vec<String> {
-        let mut lines = self.binary.lines(&self.name());
+    /// The binary tree's statistics, then the 8-wide tree's, one `name: value` per line,
+    /// the structure named `name`.
+    pub fn stats(&self, name: &str) -> Vec<String> {
+        let mut lines = self.binary.lines(name);
         lines.push(format!(
             "8-wide: {} nodes, depth {}, {:.2} MiB",
             self.node_count(),
