@@ -6,6 +6,7 @@ use std::hint::black_box;
 use std::path::PathBuf;
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use p3trace::render::sampler::SampleGrid;
 use p3trace::render::{render, RenderOptions, Sampling};
 use p3trace::scene::{parse_file, Scene};
 
@@ -36,7 +37,7 @@ fn effects(c: &mut Criterion) {
     let mut base = RenderOptions::from_scene(&scene);
     (base.width, base.height) = (96, 96);
     base.threads = Some(1);
-    base.sampling = Sampling::Jittered(4);
+    base.sampling = Sampling::Jittered(SampleGrid::square(4));
     let variants: [(&str, Effect); 5] = [
         ("16spp", |_, _| {}),
         ("soft_shadows", |_, o| o.shade.soft_light_size = Some(0.5)),

@@ -163,8 +163,10 @@ pub struct RenderArgs {
     /// Image size, overriding the scene's `resolution` (for example 1024x768).
     #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
     pub resolution: Option<(u32, u32)>,
-    /// Samples per pixel, a perfect square k*k (k x k jittered grid); 1 is one sample at
-    /// the pixel centre. Default: the scene's `spp k` (k x k), or the centre for `spp 0`.
+    /// Samples per pixel, any N >= 1: an a x b jittered grid with a x b = N, a >= b as
+    /// close as possible (8 is 4 x 2, 7 is 7 x 1, 16 is 4 x 4); 1 is one sample at the
+    /// pixel centre. The scene's `spp k` means k x k samples (the course's meaning), so
+    /// `spp 4` in a file is --spp 16. Default: the scene's `spp k`, or the centre for 0.
     #[arg(long, value_name = "N")]
     pub spp: Option<u32>,
     /// Depth at which rays stop spawning reflection and refraction rays (primary rays
@@ -193,18 +195,20 @@ pub struct RenderArgs {
     #[arg(long, value_name = "F", value_parser = parse_focal)]
     pub focal: Option<f32>,
     /// Soft shadows: each point light becomes a square (see --light-size) perpendicular
-    /// to the camera's up vector. With one sample per pixel the square is an n x n grid
-    /// of lights (--light-samples); with k x k samples each sample takes one jittered
-    /// point of cell (p, q) of a k x k grid over it. `al` area lights are always soft.
+    /// to the camera's up vector. With one sample per pixel the square becomes a grid of
+    /// point lights (--light-samples); with an a x b grid of samples each sample takes one
+    /// jittered point of cell (p, q) of an a x b grid over it. `al` area lights are
+    /// always soft.
     #[arg(long)]
     pub soft_shadows: bool,
     /// The side of a soft light's square, in scene units.
     #[arg(long, value_name = "S", requires = "soft_shadows", value_parser = parse_light_size,
           default_value_t = DEFAULT_LIGHT_SIZE)]
     pub light_size: f32,
-    /// n: with one sample per pixel, soft and area lights become n x n point lights.
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_LIGHT_GRID,
-          value_parser = clap::value_parser!(u32).range(1..=64))]
+    /// N: with one sample per pixel, each soft or area light becomes N point lights, an
+    /// a x b grid as for --spp (the default 16 is 4 x 4).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_LIGHT_GRID.cells(),
+          value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub light_samples: u32,
     /// Fuzzy reflections: a reflected direction r becomes normalize(r + G q), q uniform
     /// in the unit ball; G in [0, 1], 0 is a mirror. Without a value: 0.2.

@@ -18,6 +18,7 @@ use p3trace::accel::{BvhBuild, BvhWidth};
 use p3trace::generate::{dragon, mountain, random, skybox, sphereflake};
 use p3trace::prim::PrimKind;
 use p3trace::render::film::OutputFormat;
+use p3trace::render::sampler::SampleGrid;
 use p3trace::render::{self, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::{self, Light, Scene};
 
@@ -83,6 +84,16 @@ fn grouped(n: u64) -> String {
     out
 }
 
+/// `16 spp`, or `8 spp (4x2)` where the grid is not square.
+fn samples_label(sampling: Sampling) -> String {
+    match sampling {
+        Sampling::Jittered(grid) if grid.columns != grid.rows => {
+            format!("{} spp ({}x{})", grid.cells(), grid.columns, grid.rows)
+        }
+        _ => format!("{} spp", sampling.samples_per_pixel()),
+    }
+}
+
 /// Reads and parses the scene at `path`: a file that cannot be read is an I/O failure
 /// (exit 1), a bad scene a usage one (exit 2, at its `file:line:col`).
 fn load_scene(path: &Path) -> Result<Scene, Failure> {
@@ -140,7 +151,7 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     options.shade.max_depth = args.max_depth;
     options.shade.schlick = args.schlick;
     options.shade.soft_light_size = args.soft_shadows.then_some(args.light_size);
-    options.shade.light_grid = args.light_samples;
+    options.shade.light_grid = SampleGrid::with_cells(args.light_samples);
     options.shade.roughness = args.roughness.unwrap_or(0.0);
     if let Some(shutter) = args.shutter {
         options.shutter = shutter;
@@ -174,11 +185,11 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     if !args.quiet {
         let seconds = report.elapsed.as_secs_f64();
         println!(
-            "{}: {}x{}, {} spp, {:.3} s, {} rays, {:.2} Mrays/s -> {}",
+            "{}: {}x{}, {}, {:.3} s, {} rays, {:.2} Mrays/s -> {}",
             scene.name,
             options.width,
             options.height,
-            options.sampling.samples_per_pixel(),
+            samples_label(options.sampling),
             seconds,
             grouped(report.rays),
             report.rays as f64 / 1e6 / seconds.max(1e-9),

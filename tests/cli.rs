@@ -87,7 +87,7 @@ fn bad_usage_and_bad_scenes_exit_2_with_a_message() {
     .unwrap();
     let cases: Vec<Vec<String>> = vec![
         vec!["render".into(), bad.display().to_string()],
-        vec!["render".into(), showcase(), "--spp".into(), "3".into()],
+        vec!["render".into(), showcase(), "--spp".into(), "0".into()],
         vec![
             "render".into(),
             showcase(),
@@ -503,4 +503,42 @@ fn the_closing_line_counts_rays_exactly_and_stats_combine_with_quiet() {
     let stats = run(&["--stats", "--quiet"]);
     assert!(stats.starts_with("bvh sah: built in"), "{stats}");
     assert!(!stats.contains(" rays, "), "{stats}");
+}
+
+#[test]
+fn any_sample_count_renders_as_the_squarest_grid() {
+    let dir = scratch("cli_any_spp");
+    let text = std::fs::read_to_string(showcase()).unwrap();
+    let file_spp = |k: u32, name: &str| {
+        let path = dir.join(name);
+        std::fs::write(&path, text.replace("spp 0", &format!("spp {k}"))).unwrap();
+        path.display().to_string()
+    };
+    let (centre, two) = (file_spp(0, "centre.p3f"), file_spp(2, "two.p3f"));
+    let render = |scene: &str, extra: &[&str], name: &str| {
+        let out = dir.join(name).display().to_string();
+        let mut args = vec!["render", scene, "--resolution", "32x24", "-o", &out];
+        args.extend_from_slice(extra);
+        let run = p3trace(&args);
+        assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+        (stdout(&run), std::fs::read(&out).unwrap())
+    };
+    // The file's `spp 2` is 2 x 2 samples: --spp 4 on the same scene.
+    let (line, from_file) = render(&two, &[], "file.png");
+    assert!(line.contains(", 4 spp, "), "{line}");
+    assert_eq!(render(&centre, &["--spp", "4"], "flag.png").1, from_file);
+    // 8 is a 4 x 2 grid, the same in both modes, and unlike 4 or 16 samples.
+    let (line, eight) = render(&centre, &["--spp", "8"], "eight.png");
+    assert!(line.contains(", 8 spp (4x2), "), "{line}");
+    let scalar = render(&centre, &["--spp", "8", "--mode", "scalar"], "8s.png").1;
+    assert_eq!(scalar, eight);
+    assert_ne!(eight, from_file);
+    let (line, _) = render(&centre, &["--spp", "7"], "seven.png");
+    assert!(line.contains(", 7 spp (7x1), "), "{line}");
+    // Light samples take any count too: 8 soft points differ from the default 16.
+    let soft = ["--soft-shadows", "--light-samples"];
+    let eight_lights = render(&centre, &[soft[0], soft[1], "8"], "l8.png").1;
+    let sixteen = render(&centre, &[soft[0], soft[1], "16"], "l16.png").1;
+    assert_eq!(render(&centre, &[soft[0]], "ldefault.png").1, sixteen);
+    assert_ne!(eight_lights, sixteen);
 }

@@ -7,6 +7,7 @@ use common::render_scene;
 use glam::{Vec2, Vec3};
 use p3trace::accel::AccelKind;
 use p3trace::render::film::Film;
+use p3trace::render::sampler::SampleGrid;
 use p3trace::render::{RenderMode, RenderOptions, Sampling};
 use p3trace::scene::p3f::parse_text;
 use p3trace::scene::parse_file;
@@ -72,7 +73,9 @@ fn antialiased_edge_matches_exact_pixel_coverage() {
     };
 
     let k = 8;
-    let jittered = render_scene(&scene, |o| o.sampling = Sampling::Jittered(k));
+    let jittered = render_scene(&scene, |o| {
+        o.sampling = Sampling::Jittered(SampleGrid::square(k))
+    });
     let centre = render_scene(&scene, |o| o.sampling = Sampling::Centre);
     // k x k strata, of which a straight edge crosses at most 2k, each off by at most
     // 1 / k^2 with variance at most 1 / (4 k^4): a standard deviation of at most
@@ -123,7 +126,9 @@ fn focal_plane_stays_sharp_and_far_objects_spread_by_the_circle_of_confusion() {
     let profile = |aperture: f32| {
         let mut scene = scene.clone();
         scene.camera.aperture = aperture;
-        let film = render_scene(&scene, |o| o.sampling = Sampling::Jittered(8));
+        let film = render_scene(&scene, |o| {
+            o.sampling = Sampling::Jittered(SampleGrid::square(8))
+        });
         (0..width)
             .map(|x| {
                 let sum: f32 = rows.clone().map(|y| 1.0 - grey(&film, x, y)).sum();
@@ -232,7 +237,7 @@ fn soft_shadow_umbra_stays_black_and_penumbra_grows_with_light_size() {
         hard.iter().all(|&v| v == 0.0 || v == 1.0),
         "hard shadows are all or nothing"
     );
-    for sampling in [Sampling::Centre, Sampling::Jittered(4)] {
+    for sampling in [Sampling::Centre, Sampling::Jittered(SampleGrid::square(4))] {
         let mut previous = 0;
         for size in [0.1, 0.2, 0.4] {
             let (values, centre) = visibility(sampling, Some(size));
@@ -286,7 +291,7 @@ fn motion_blur_covers_the_swept_path_and_nothing_beyond() {
     let scene = parse_text(&text).unwrap();
     let k = 16;
     let film = render_scene(&scene, |o| {
-        o.sampling = Sampling::Jittered(k);
+        o.sampling = Sampling::Jittered(SampleGrid::square(k));
         o.shutter = [0.0, 1.0];
     });
 
@@ -350,7 +355,7 @@ fn fuzzy_reflections_blur_the_reflection_only_and_roughness_zero_is_the_mirror()
     let scene = parse_text(&text).unwrap();
     let image = |roughness: Option<f32>| {
         render_scene(&scene, |o| {
-            o.sampling = Sampling::Jittered(4);
+            o.sampling = Sampling::Jittered(SampleGrid::square(4));
             if let Some(g) = roughness {
                 o.shade.roughness = g;
             }
@@ -394,7 +399,7 @@ fn fuzzy_reflections_blur_the_reflection_only_and_roughness_zero_is_the_mirror()
 #[test]
 fn effects_at_neutral_values_give_the_whitted_image() {
     let scene = parse_file(&common::project_file("scenes/balls_low.p3f")).unwrap();
-    for sampling in [Sampling::Centre, Sampling::Jittered(2)] {
+    for sampling in [Sampling::Centre, Sampling::Jittered(SampleGrid::square(2))] {
         let whitted = render_scene(&scene, |o| {
             (o.width, o.height) = (64, 64);
             o.sampling = sampling;
@@ -403,7 +408,7 @@ fn effects_at_neutral_values_give_the_whitted_image() {
             (o.width, o.height) = (64, 64);
             o.sampling = sampling;
             o.shade.soft_light_size = Some(0.0);
-            o.shade.light_grid = 1;
+            o.shade.light_grid = SampleGrid::square(1);
             o.shade.roughness = 0.0;
             o.shutter = [0.0, 0.0];
         });
@@ -437,7 +442,7 @@ fn effects_are_deterministic_across_threads_modes_and_structures() {
     for scene in &scenes {
         let effects = |o: &mut RenderOptions| {
             (o.width, o.height) = (37, 29);
-            o.sampling = Sampling::Jittered(2);
+            o.sampling = Sampling::Jittered(SampleGrid::square(2));
             o.shade.soft_light_size = Some(0.6);
             o.shade.roughness = 0.3;
             o.shutter = [0.0, 0.5];

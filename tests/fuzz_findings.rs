@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 use p3trace::accel::AccelKind;
+use p3trace::render::sampler::SampleGrid;
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::p3f::parse_text;
 
@@ -105,7 +106,7 @@ fn far_plane_difference(kind: AccelKind, mode: RenderMode) -> Option<String> {
     (options.width, options.height) = (8, 6);
     options.threads = Some(1);
     options.shade.max_depth = 3;
-    options.sampling = Sampling::Jittered(2);
+    options.sampling = Sampling::Jittered(SampleGrid::square(2));
     let mut image = |kind, mode| {
         options.accel.kind = kind;
         options.mode = mode;

@@ -9,6 +9,7 @@ use common::render_scene;
 use glam::Vec3;
 use p3trace::compare;
 use p3trace::render::film::{to_byte, Film};
+use p3trace::render::sampler::SampleGrid;
 use p3trace::render::shade::EPS;
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::{parse_file, Scene};
@@ -33,7 +34,7 @@ fn packet_and_scalar_modes_give_the_same_image() {
         let [scalar, packet] = [RenderMode::Scalar, RenderMode::Packet].map(|mode| {
             render_scene(&scene, |o| {
                 (o.width, o.height) = (45, 31);
-                o.sampling = Sampling::Jittered(2);
+                o.sampling = Sampling::Jittered(SampleGrid::square(2));
                 o.mode = mode;
             })
             .to_rgb8()
@@ -50,7 +51,7 @@ fn output_is_identical_for_one_and_two_threads() {
         .map(|&threads| {
             render_scene(&scene, |o| {
                 (o.width, o.height) = (97, 61);
-                o.sampling = Sampling::Jittered(2);
+                o.sampling = Sampling::Jittered(SampleGrid::square(2));
                 o.threads = Some(threads);
             })
         })

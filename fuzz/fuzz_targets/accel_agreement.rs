@@ -9,6 +9,7 @@ use libfuzzer_sys::fuzz_target;
 use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
 use p3trace::accel::{BvhBuild, BvhWidth};
 use p3trace::ray::{Hit, Ray, RayPacket};
+use p3trace::render::sampler::SampleGrid;
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::p3f::{parse_text, MAX_MAGNITUDE};
 use p3trace::scene::CameraSpec;
@@ -270,7 +271,7 @@ fuzz_target!(|input: Input| {
     options.shade.max_depth = 3;
     if input.jittered {
         // With samples to spread them over, every distribution effect is on too.
-        options.sampling = Sampling::Jittered(2);
+        options.sampling = Sampling::Jittered(SampleGrid::with_cells(2));
         options.shade.soft_light_size = Some(0.5);
         options.shade.roughness = 0.3;
         options.shutter = [0.0, 0.5];

@@ -5,12 +5,12 @@
 
 use glam::Vec3;
 
-use super::sampler::{dim, Sample};
+use super::sampler::{dim, Sample, SampleGrid};
 use crate::scene::Light;
 
-/// Lights sampled over an area become this many points a side when a pixel has one
-/// sample (P3F.md 6.3), unless the options say otherwise.
-pub const DEFAULT_LIGHT_GRID: u32 = 4;
+/// Lights sampled over an area become this grid of points when a pixel has one sample
+/// (P3F.md 6.3), unless the options say otherwise.
+pub const DEFAULT_LIGHT_GRID: SampleGrid = SampleGrid::square(4);
 
 /// The side of the square a point light becomes with soft shadows (P3F.md 6.3).
 pub const DEFAULT_LIGHT_SIZE: f32 = 0.5;
@@ -27,8 +27,8 @@ pub struct LightSample {
 pub enum Emitter {
     /// The same point for every sample.
     Point(LightSample),
-    /// Sample `(p, q)` of a pixel with k x k samples takes one point of the rectangle,
-    /// jittered in cell `(p, q)` of a k x k grid over it, with the full colour.
+    /// Sample `(p, q)` of a pixel's a x b grid of samples takes one point of the
+    /// rectangle, jittered in cell `(p, q)` of an a x b grid over it, with the full colour.
     Rectangle(Rectangle),
 }
 
@@ -48,13 +48,14 @@ impl Rectangle {
         self.centre + self.across * s + self.up * t
     }
 
-    /// The centres of its n x n cells, each with 1 / n^2 of the colour.
-    fn grid(self, n: u32) -> impl Iterator<Item = LightSample> {
-        let n = n.max(1);
-        let cell = move |i: u32| (i as f32 + 0.5) / n as f32 - 0.5;
-        (0..n * n).map(move |i| LightSample {
-            position: self.at(cell(i / n), cell(i % n)),
-            colour: self.colour / (n * n) as f32,
+    /// The centres of the cells of `grid` over it (columns across, rows up), each with
+    /// an equal share of the colour.
+    fn grid(self, grid: SampleGrid) -> impl Iterator<Item = LightSample> {
+        let (columns, rows) = (grid.columns.max(1), grid.rows.max(1));
+        let centre = |i: u32, n: u32| (i as f32 + 0.5) / n as f32 - 0.5;
+        (0..columns * rows).map(move |i| LightSample {
+            position: self.at(centre(i / rows, columns), centre(i % rows, rows)),
+            colour: self.colour / (columns * rows) as f32,
         })
     }
 }
@@ -66,9 +67,9 @@ impl Emitter {
             Emitter::Point(light) => *light,
             Emitter::Rectangle(rectangle) => {
                 let dim = dim::LIGHT + 2 * index as u32;
-                let k = sample.cells as f32;
-                let s = (sample.cell[0] as f32 + sample.rng.uniform(dim)) / k - 0.5;
-                let t = (sample.cell[1] as f32 + sample.rng.uniform(dim + 1)) / k - 0.5;
+                let (columns, rows) = (sample.grid.columns as f32, sample.grid.rows as f32);
+                let s = (sample.cell[0] as f32 + sample.rng.uniform(dim)) / columns - 0.5;
+                let t = (sample.cell[1] as f32 + sample.rng.uniform(dim + 1)) / rows - 0.5;
                 LightSample {
                     position: rectangle.at(s, t),
                     colour: rectangle.colour,
@@ -81,13 +82,13 @@ impl Emitter {
 /// The lights of a scene as the shader samples them. Lights with an area are the
 /// scene's `al` lights and, with soft shadows, its point lights as squares of side
 /// `soft_light_size` in the plane perpendicular to `camera_up`. With `jittered`
-/// sampling they stay rectangles, sampled once per sample; otherwise each becomes an
-/// n x n grid of points (n = `light_grid`), each with 1 / n^2 of the colour.
+/// sampling they stay rectangles, sampled once per sample; otherwise each becomes the
+/// points of `light_grid`, each with an equal share of the colour.
 pub fn emitters(
     lights: &[Light],
     camera_up: Vec3,
     soft_light_size: Option<f32>,
-    light_grid: u32,
+    light_grid: SampleGrid,
     jittered: bool,
 ) -> Vec<Emitter> {
     let mut emitters = Vec::new();
@@ -172,10 +173,7 @@ mod tests {
             colour: Vec3::ONE,
         };
         let samples = emitters(&[light], Vec3::Z, None, DEFAULT_LIGHT_GRID, false);
-        assert_eq!(
-            samples.len(),
-            (DEFAULT_LIGHT_GRID * DEFAULT_LIGHT_GRID) as usize
-        );
+        assert_eq!(samples.len(), DEFAULT_LIGHT_GRID.cells() as usize);
         let points = samples.iter().map(|e| match e {
             Emitter::Point(s) => *s,
             Emitter::Rectangle(_) => panic!("without antialiasing lights are points"),
@@ -188,11 +186,11 @@ mod tests {
         }
     }
 
-    fn sample(cell: [u32; 2], cells: u32, index: u32) -> Sample {
+    fn sample(cell: [u32; 2], grid: SampleGrid, index: u32) -> Sample {
         Sample {
             rng: SampleRng::new(index, 0, 7),
             cell,
-            cells,
+            grid,
         }
     }
 
@@ -204,11 +202,11 @@ mod tests {
         };
         let up = Vec3::new(0.0, 1.0, 1.0);
         // Without antialiasing: a 3 x 3 grid in the plane through the light.
-        let grid = emitters(&[light], up, Some(0.5), 3, false);
+        let grid = emitters(&[light], up, Some(0.5), SampleGrid::square(3), false);
         assert_eq!(grid.len(), 9);
         let mut total = Vec3::ZERO;
         for emitter in &grid {
-            let point = emitter.point(0, &sample([0, 0], 1, 0));
+            let point = emitter.point(0, &sample([0, 0], SampleGrid::square(1), 0));
             let offset = point.position - Vec3::new(1.0, 2.0, 3.0);
             assert!(offset.dot(up).abs() < 1e-6, "{offset} leaves the plane");
             assert!(offset.length() <= 0.5 * 2f32.sqrt() / 2.0 * 1.001);
@@ -218,7 +216,7 @@ mod tests {
 
         // With 4 x 4 antialiasing: sample (p, q) takes a point of cell (p, q), with the
         // light's full colour, and fills that cell.
-        let [square] = emitters(&[light], up, Some(0.5), 3, true)[..] else {
+        let [square] = emitters(&[light], up, Some(0.5), SampleGrid::square(3), true)[..] else {
             panic!("one rectangle per light")
         };
         let Emitter::Rectangle(r) = square else {
@@ -232,7 +230,7 @@ mod tests {
         };
         let (mut low, mut high) = ((f32::MAX, f32::MAX), (f32::MIN, f32::MIN));
         for i in 0..2000 {
-            let point = square.point(0, &sample([1, 2], 4, i));
+            let point = square.point(0, &sample([1, 2], SampleGrid::square(4), i));
             assert_eq!(point.colour, Vec3::ONE);
             let (s, t) = coordinates(point.position);
             assert!(
@@ -242,5 +240,47 @@ mod tests {
             (low, high) = ((low.0.min(s), low.1.min(t)), (high.0.max(s), high.1.max(t)));
         }
         assert!(low.0 < 1.01 && low.1 < 2.01 && high.0 > 1.99 && high.1 > 2.99);
+    }
+
+    #[test]
+    fn rectangular_grids_run_columns_across_and_rows_up() {
+        // Width 2 along x, height 1 along z.
+        let light = Light::Area {
+            centre: Vec3::new(0., 5., 0.),
+            target: Vec3::ZERO,
+            width: 2.0,
+            height: 1.0,
+            colour: Vec3::ONE,
+        };
+        let eight = SampleGrid::with_cells(8);
+        let points: Vec<Vec3> = emitters(&[light], Vec3::Z, None, eight, false)
+            .iter()
+            .map(|e| {
+                e.point(0, &sample([0, 0], SampleGrid::square(1), 0))
+                    .position
+            })
+            .collect();
+        let xs = [-0.75, -0.25, 0.25, 0.75];
+        let zs = [-0.25, 0.25];
+        let expected: Vec<Vec3> = xs
+            .iter()
+            .flat_map(|&x| zs.iter().map(move |&z| Vec3::new(x, 5.0, z)))
+            .collect();
+        assert_eq!(points.len(), expected.len());
+        for (p, e) in points.iter().zip(&expected) {
+            assert!((*p - *e).length() < 1e-6, "{p} instead of {e}");
+        }
+
+        // Sample (3, 1) of a 4 x 2 pixel grid takes a point of the light's cell (3, 1).
+        let [rectangle] = emitters(&[light], Vec3::Z, None, eight, true)[..] else {
+            panic!("one rectangle per light")
+        };
+        for i in 0..500 {
+            let p = rectangle.point(0, &sample([3, 1], eight, i)).position;
+            assert!(
+                (0.5..1.0).contains(&p.x) && (0.0..0.5).contains(&p.z),
+                "{p}"
+            );
+        }
     }
 }

@@ -22,7 +22,7 @@ use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::scene::Scene;
 use camera::Camera;
 use film::Film;
-use sampler::{dim, Sample, SampleRng};
+use sampler::{dim, Sample, SampleGrid, SampleRng};
 use shade::{ShadeOptions, Shader, ShadowPacket};
 use skybox::Skybox;
 
@@ -34,8 +34,8 @@ pub const TILE: u32 = 16;
 pub enum Sampling {
     /// One sample through the pixel centre.
     Centre,
-    /// A k x k grid of cells, one sample jittered in each (P3F.md 6.1).
-    Jittered(u32),
+    /// A grid of cells, one sample jittered in each (P3F.md 6.1, which has k x k).
+    Jittered(SampleGrid),
 }
 
 impl Sampling {
@@ -44,27 +44,26 @@ impl Sampling {
         if k == 0 {
             Sampling::Centre
         } else {
-            Sampling::Jittered(k)
+            Sampling::Jittered(SampleGrid::square(k))
         }
     }
 
-    /// `--spp N` on the command line: N must be a perfect square; 1 is the pixel centre.
+    /// `--spp N` on the command line: N samples, as the squarest a x b jittered grid
+    /// (a square N is the file's grid); 1 is the pixel centre.
     pub fn from_samples_per_pixel(n: u32) -> Result<Self, String> {
-        let k = (n as f64).sqrt().round() as u32;
+        let most = MAX_SPP_SIDE * MAX_SPP_SIDE;
         match n {
             0 => Err("--spp must be at least 1".into()),
             1 => Ok(Sampling::Centre),
-            _ if k * k == n && k <= MAX_SPP_SIDE => Ok(Sampling::Jittered(k)),
-            _ => Err(format!(
-                "--spp {n} is not a perfect square (k x k samples per pixel, such as 4, 16 or 64)"
-            )),
+            _ if n <= most => Ok(Sampling::Jittered(SampleGrid::with_cells(n))),
+            _ => Err(format!("--spp {n} is more than {most} samples per pixel")),
         }
     }
 
     pub fn samples_per_pixel(self) -> u32 {
         match self {
             Sampling::Centre => 1,
-            Sampling::Jittered(k) => k * k,
+            Sampling::Jittered(grid) => grid.cells(),
         }
     }
 }
@@ -273,21 +272,21 @@ fn render_tile(
     tile: Tile,
 ) -> (Vec<Vec3>, u64) {
     let mut rays = 0;
-    let (k, jittered) = match options.sampling {
-        Sampling::Centre => (1, false),
-        Sampling::Jittered(k) => (k, true),
+    let (grid, jittered) = match options.sampling {
+        Sampling::Centre => (SampleGrid::square(1), false),
+        Sampling::Jittered(grid) => (grid, true),
     };
     // Sample (p, q) of pixel (x, y): the same ray and random numbers in both modes.
     let [open, close] = options.shutter;
     let sample_ray = |x: u32, y: u32, p: u32, q: u32| {
-        let rng = SampleRng::new(y * options.width + x, q * k + p, options.seed);
+        let rng = SampleRng::new(y * options.width + x, q * grid.columns + p, options.seed);
         let (jx, jy) = if jittered {
             (rng.uniform(dim::FILM_X), rng.uniform(dim::FILM_Y))
         } else {
             (0.5, 0.5)
         };
-        let sx = x as f32 + (p as f32 + jx) / k as f32;
-        let sy = y as f32 + (q as f32 + jy) / k as f32;
+        let sx = x as f32 + (p as f32 + jx) / grid.columns as f32;
+        let sy = y as f32 + (q as f32 + jy) / grid.rows as f32;
         let lens = if camera.is_thin_lens() {
             rng.unit_disk(dim::LENS_U, dim::LENS_V)
         } else {
@@ -301,7 +300,7 @@ fn render_tile(
         let sample = Sample {
             rng,
             cell: [p, q],
-            cells: k,
+            grid,
         };
         (camera.ray(sx, sy, lens, time), sample)
     };
@@ -313,13 +312,13 @@ fn render_tile(
             shader,
             options,
             tile,
-            k,
+            grid,
             &sample_ray,
             sums,
             shadows,
             &mut rays,
         );
-        let samples = (k * k) as f32;
+        let samples = grid.cells() as f32;
         (sums.iter().map(|&sum| sum / samples).collect(), rays)
     })
 }
@@ -331,7 +330,7 @@ fn trace_tile(
     shader: &Shader,
     options: &RenderOptions,
     tile: Tile,
-    k: u32,
+    grid: SampleGrid,
     sample_ray: &dyn Fn(u32, u32, u32, u32) -> (Ray, Sample),
     sums: &mut [Vec3],
     shadows: &mut [ShadowPacket],
@@ -344,8 +343,8 @@ fn trace_tile(
                     tile.x + i as u32 % tile.width,
                     tile.y + i as u32 / tile.width,
                 );
-                for q in 0..k {
-                    for p in 0..k {
+                for q in 0..grid.rows {
+                    for p in 0..grid.columns {
                         let (ray, sample) = sample_ray(x, y, p, q);
                         *sum += shader.trace(&ray, &sample, 1, 1.0, rays);
                     }
@@ -361,8 +360,8 @@ fn trace_tile(
                         (x < tile.width && y < tile.height).then_some((x, y))
                     };
                     let active = lane_mask(|l| lane_pixel(l as u32).is_some());
-                    for q in 0..k {
-                        for p in 0..k {
+                    for q in 0..grid.rows {
+                        for p in 0..grid.columns {
                             let lanes: [(Ray, Sample); 8] = std::array::from_fn(|l| {
                                 let (x, y) = lane_pixel(l as u32).unwrap_or((bx, by));
                                 sample_ray(tile.x + x, tile.y + y, p, q)

@@ -64,14 +64,50 @@ impl SampleRng {
     }
 }
 
+/// A grid of `columns` x `rows` cells over a pixel (one jittered sample in each) or
+/// over a light (one point in each).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SampleGrid {
+    pub columns: u32,
+    pub rows: u32,
+}
+
+impl SampleGrid {
+    /// The k x k grid of the file's `spp k` (P3F.md 6.1).
+    pub const fn square(k: u32) -> Self {
+        SampleGrid {
+            columns: k,
+            rows: k,
+        }
+    }
+
+    /// `n` cells as an a x b grid with a >= b as close as possible: b is the largest
+    /// divisor of n not above its square root (8 is 4 x 2, 7 is 7 x 1, 16 is 4 x 4).
+    pub fn with_cells(n: u32) -> Self {
+        let n = n.max(1);
+        let rows = (1..=n.isqrt())
+            .rev()
+            .find(|b| n.is_multiple_of(*b))
+            .unwrap_or(1);
+        SampleGrid {
+            columns: n / rows,
+            rows,
+        }
+    }
+
+    pub fn cells(self) -> u32 {
+        self.columns * self.rows
+    }
+}
+
 /// The random state of one primary sample and of the rays it spawns.
 #[derive(Clone, Copy, Debug)]
 pub struct Sample {
     /// This ray's random numbers.
     pub rng: SampleRng,
-    /// The sample's cell `(p, q)` in the pixel's k x k grid, and k.
+    /// The sample's cell `(p, q)` in the pixel's grid, and that grid.
     pub cell: [u32; 2],
-    pub cells: u32,
+    pub grid: SampleGrid,
 }
 
 impl Sample {
@@ -146,6 +182,31 @@ mod tests {
         assert_ne!(x(rng), x(reflected));
         assert_ne!(x(reflected), x(transmitted));
         assert_eq!(x(reflected), x(rng.spawn(0)));
+    }
+
+    #[test]
+    fn any_cell_count_becomes_the_squarest_grid() {
+        let shape = |n| {
+            let g = SampleGrid::with_cells(n);
+            (g.columns, g.rows)
+        };
+        assert_eq!(shape(1), (1, 1));
+        assert_eq!(shape(2), (2, 1));
+        assert_eq!(shape(7), (7, 1));
+        assert_eq!(shape(8), (4, 2));
+        assert_eq!(shape(12), (4, 3));
+        assert_eq!(shape(16), (4, 4));
+        assert_eq!(shape(1 << 20), (1024, 1024));
+        for n in 1..=2000 {
+            let g = SampleGrid::with_cells(n);
+            assert_eq!(g.cells(), n);
+            assert!(g.columns >= g.rows);
+            // No divisor of n lies strictly between the rows and the square root.
+            assert!(
+                (g.rows + 1..=n.isqrt()).all(|b| !n.is_multiple_of(b)),
+                "{n}"
+            );
+        }
     }
 
     #[test]

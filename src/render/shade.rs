@@ -6,7 +6,7 @@
 use glam::Vec3;
 
 use super::light::{emitters, Emitter, DEFAULT_LIGHT_GRID};
-use super::sampler::{dim, Sample, SampleRng};
+use super::sampler::{dim, Sample, SampleGrid, SampleRng};
 use super::skybox::Skybox;
 use crate::accel::Tracer;
 use crate::ray::{lane_mask, Hit, Ray, RayPacket};
@@ -28,8 +28,8 @@ pub struct ShadeOptions {
     /// Soft shadows: each point light becomes a square of this side, perpendicular to
     /// the camera's up vector. `None`: point lights cast hard shadows.
     pub soft_light_size: Option<f32>,
-    /// Without antialiasing, a light with an area becomes an n x n grid of points.
-    pub light_grid: u32,
+    /// Without antialiasing, a light with an area becomes the points of this grid.
+    pub light_grid: SampleGrid,
     /// Fuzzy reflections: how far a reflected direction strays (0 is a mirror).
     pub roughness: f32,
 }
@@ -429,7 +429,7 @@ mod tests {
             &Sample {
                 rng: SampleRng::new(0, 0, 7),
                 cell: [0, 0],
-                cells: 1,
+                grid: SampleGrid::square(1),
             },
             1,
             1.5,
