@@ -186,8 +186,9 @@ pub struct RenderArgs {
     /// points, shutter times (and the layout of the `random` scene).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
-    /// Depth of field: the lens radius in pixel widths, overriding the scene's
-    /// `aperture` (0 is a pinhole).
+    /// Depth of field: the lens radius in pixel widths of the scene's `resolution`
+    /// (so a preview at another --resolution shows the same blur), overriding the
+    /// scene's `aperture` (0 is a pinhole).
     #[arg(long, value_name = "A", value_parser = parse_aperture)]
     pub aperture: Option<f32>,
     /// Depth of field: the distance of the focal plane as a multiple of the distance

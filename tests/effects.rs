@@ -107,41 +107,52 @@ fn antialiased_edge_matches_exact_pixel_coverage() {
     );
 }
 
+/// The depth-of-field scene, a file of 64 x 32 pixels: the camera at z = 10 looks at
+/// the origin, so the focal plane (focal 1) is z = 0. Near: a thin box, x <= -1 on the
+/// focal plane. Far: x >= 2 at z = -10, twice as far; seen through the focal plane it
+/// starts at x = 1.
+const DOF_FILE_WIDTH: u32 = 64;
+
+fn dof_scene() -> p3trace::scene::Scene {
+    let text = format!(
+        "{BLACK_ON_WHITE}{}box -40 -3 -0.001 -1 3 0\nbox 2 -12 -11 40 12 -10\n",
+        camera(Vec3::new(0.0, 0.0, 10.0), Vec3::Y, 45.0, DOF_FILE_WIDTH, 32)
+    );
+    parse_text(&text).unwrap()
+}
+
+/// The share of samples meeting an object in each column of the depth-of-field scene
+/// rendered at `width` x `width / 2` with `aperture`, over the middle half of the rows;
+/// and the column (in pixels, fractional) of a point `x` of the focal plane.
+fn dof_profile(aperture: f32, width: u32) -> (Vec<f32>, impl Fn(f32) -> f32) {
+    let mut scene = dof_scene();
+    scene.camera.aperture = aperture;
+    let height = width / 2;
+    let film = render_scene(&scene, |o| {
+        (o.width, o.height) = (width, height);
+        o.sampling = Sampling::Jittered(SampleGrid::square(8));
+    });
+    let rows = height / 4..3 * height / 4;
+    let profile = (0..width)
+        .map(|x| {
+            let sum: f32 = rows.clone().map(|y| 1.0 - grey(&film, x, y)).sum();
+            sum / rows.len() as f32
+        })
+        .collect();
+    let h = 2.0 * 10.0 * (22.5f32.to_radians()).tan();
+    let w = h * 2.0;
+    (profile, move |x: f32| (x / w + 0.5) * width as f32)
+}
+
 /// Depth of field: a box face on the focal plane images exactly as through a pinhole,
 /// while a box twice as far spreads over its circle of confusion and no further.
 #[test]
 fn focal_plane_stays_sharp_and_far_objects_spread_by_the_circle_of_confusion() {
-    let (width, height) = (64, 32);
+    let width = DOF_FILE_WIDTH;
     let aperture = 8.0;
-    // The camera at z = 10 looks at the origin: the focal plane (focal 1) is z = 0.
-    // Near: a thin box, x <= -1 on the focal plane. Far: x >= 2 at z = -10, twice as
-    // far; seen through the focal plane it starts at x = 1.
-    let text = format!(
-        "{BLACK_ON_WHITE}{}box -40 -3 -0.001 -1 3 0\nbox 2 -12 -11 40 12 -10\n",
-        camera(Vec3::new(0.0, 0.0, 10.0), Vec3::Y, 45.0, width, height)
-    );
-    let scene = parse_text(&text).unwrap();
-    let rows = 8..24;
-    // The share of samples meeting an object in column x, over the middle rows.
-    let profile = |aperture: f32| {
-        let mut scene = scene.clone();
-        scene.camera.aperture = aperture;
-        let film = render_scene(&scene, |o| {
-            o.sampling = Sampling::Jittered(SampleGrid::square(8))
-        });
-        (0..width)
-            .map(|x| {
-                let sum: f32 = rows.clone().map(|y| 1.0 - grey(&film, x, y)).sum();
-                sum / rows.len() as f32
-            })
-            .collect::<Vec<f32>>()
-    };
-    let (pinhole, lens) = (profile(0.0), profile(aperture));
+    let ((pinhole, column), (lens, _)) = (dof_profile(0.0, width), dof_profile(aperture, width));
 
     // Columns of the edges through a pinhole: x = -1 and x = 1 on the focal plane.
-    let h = 2.0 * 10.0 * (22.5f32.to_radians()).tan();
-    let w = h * width as f32 / height as f32;
-    let column = |x: f32| (x / w + 0.5) * width as f32;
     let (near_edge, far_edge) = (column(-1.0), column(1.0));
     // The circle of confusion of the far box: aperture * |Z - F| / (Z * focal) pixels
     // in radius (P3F.md 3: the lens radius is `aperture` pixel widths).
@@ -183,6 +194,34 @@ fn focal_plane_stays_sharp_and_far_objects_spread_by_the_circle_of_confusion() {
     assert!(
         (area(&lens) - area(&pinhole)).abs() < 0.5,
         "{lens:?} {pinhole:?}"
+    );
+}
+
+/// A preview at half the file's size shows the same blur at half the size: the lens
+/// radius counts pixel widths of the file's resolution (P3F.md 3), so the far edge's
+/// circle of confusion spans half as many of the preview's pixels, not as many.
+#[test]
+fn a_smaller_preview_shows_the_same_blur_scaled_down() {
+    let width = DOF_FILE_WIDTH / 2;
+    let (lens, column) = dof_profile(8.0, width);
+    let far_edge = column(1.0);
+    // 4 pixels of the file, 2 of the preview.
+    let radius = 8.0 * (20.0 - 10.0) / 20.0 / 2.0;
+    for (x, &share) in lens.iter().enumerate() {
+        let centre = x as f32 + 0.5;
+        if centre > far_edge + radius + 0.5 {
+            assert_eq!(
+                share, 1.0,
+                "column {x} lies behind the far box's blur: {lens:?}"
+            );
+        } else if centre > column(-1.0) + 0.5 && centre < far_edge - radius - 0.5 {
+            assert_eq!(share, 0.0, "column {x} lies between the images: {lens:?}");
+        }
+    }
+    let spread = lens.iter().filter(|&&s| s > 0.02 && s < 0.98).count();
+    assert!(
+        spread >= 3,
+        "the far edge spreads over {spread} columns: {lens:?}"
     );
 }
 

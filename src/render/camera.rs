@@ -33,6 +33,9 @@ impl Camera {
         let v = n.cross(u);
         let plane_height = 2.0 * plane_distance * (spec.angle.to_radians() / 2.0).tan();
         let plane_width = plane_height * width as f32 / height as f32;
+        // The aperture counts pixel widths of the file's resolution, so that a preview at
+        // any size shows the same blur (P3F.md section 3).
+        let file_plane_width = plane_height * spec.width as f32 / spec.height as f32;
         Camera {
             eye: spec.from,
             u,
@@ -43,7 +46,7 @@ impl Camera {
             plane_height,
             width: width as f32,
             height: height as f32,
-            lens_radius: spec.aperture * plane_width / width as f32,
+            lens_radius: spec.aperture * file_plane_width / spec.width as f32,
             focal: spec.focal,
         }
     }
@@ -130,5 +133,21 @@ mod tests {
         // The lens is aperture pixel widths wide: 4 * 40 / 200 = 0.8.
         let edge = cam.ray(sx, sy, Vec2::new(1., 0.), 0.0);
         assert!((edge.origin - Vec3::new(0.8, 0., 10.)).length() < 1e-5);
+    }
+
+    #[test]
+    fn the_lens_keeps_its_size_at_any_image_size() {
+        // The pixel widths are the file's (200 x 100): the same lens at every size.
+        let s = CameraSpec {
+            aperture: 4.0,
+            ..spec()
+        };
+        for (width, height) in [(200, 100), (25, 13), (1600, 800), (100, 100)] {
+            let edge = Camera::new(&s, width, height).ray(3.0, 2.0, Vec2::new(1., 0.), 0.0);
+            assert!(
+                (edge.origin - Vec3::new(0.8, 0., 10.)).length() < 1e-5,
+                "{width}x{height}"
+            );
+        }
     }
 }

@@ -65,7 +65,7 @@ pub struct CameraSpec {
     pub hither: f32,
     pub width: u32,
     pub height: u32,
-    /// Lens radius in pixel widths; 0 is a pinhole.
+    /// Lens radius in pixel widths of the file's `resolution`; 0 is a pinhole.
     pub aperture: f32,
     /// Distance of the focal plane as a multiple of `|from - at|`.
     pub focal: f32,
