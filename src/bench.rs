@@ -206,7 +206,7 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
     [primary, shadow, reflection]
 }
 
-/// Traces every set along every path with each of `thread_counts`, calling `print` with
+/// Traces every set along every path with each of `thread_counts`, calling `report` with
 /// a result line per set, path and thread count and a `p3trace-best` line per set. Every
 /// path and thread count must find what the first found; one that does not is an error.
 pub fn run(
@@ -214,7 +214,7 @@ pub fn run(
     sets: &[RaySet],
     thread_counts: &[usize],
     reps: u32,
-    mut print: impl FnMut(String),
+    mut report: impl FnMut(Line),
 ) -> Result<(), String> {
     let paths = [
         ("p3trace-single", Path::Single),
@@ -230,7 +230,7 @@ pub fn run(
             let mut best: Option<SetResult> = None;
             for (api, path) in paths {
                 let r = trace_set(tracer, set, path, &pool, reps)?;
-                print(line(set, api, n, &r));
+                report(Line::new(set, api, n, &r));
                 match first.get(k) {
                     None => first.push(r),
                     Some(one) if (one.hits, one.tsum) == (r.hits, r.tsum) => {}
@@ -247,7 +247,7 @@ pub fn run(
                 }
             }
             let best = best.expect("at least one path ran");
-            print(line(set, "p3trace-best", n, &best));
+            report(Line::new(set, "p3trace-best", n, &best));
         }
     }
     Ok(())
@@ -361,31 +361,41 @@ fn checksum(answers: &[f32]) -> (u64, f64) {
         .fold((0, 0.0), |(hits, sum), &t| (hits + 1, sum + t as f64))
 }
 
-/// One result line: `ray-set api threads rays hits tsum mrays_per_s`.
-pub fn line(set: &RaySet, api: &str, threads: usize, r: &SetResult) -> String {
-    format!(
-        "{:<10}  {:<15}  {:2}  {:8}  {:8}  {:16.3}  {:8.2}",
-        set.name,
-        api,
-        threads,
-        set.rays.len(),
-        r.hits,
-        r.tsum,
-        r.mrays_per_s(set.rays.len())
-    )
+/// One result of the protocol: a set traced along one path (`api`) with `threads`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Line {
+    pub ray_set: &'static str,
+    pub api: &'static str,
+    pub threads: usize,
+    pub rays: usize,
+    pub hits: u64,
+    pub tsum: f64,
+    pub mrays_per_s: f64,
 }
 
-/// The CPU's model name, for the comment lines.
-pub fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|info| {
-            info.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, name)| name.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into())
+impl Line {
+    fn new(set: &RaySet, api: &'static str, threads: usize, r: &SetResult) -> Self {
+        Line {
+            ray_set: set.name,
+            api,
+            threads,
+            rays: set.rays.len(),
+            hits: r.hits,
+            tsum: r.tsum,
+            mrays_per_s: r.mrays_per_s(set.rays.len()),
+        }
+    }
+}
+
+/// The protocol's line: `ray-set api threads rays hits tsum mrays_per_s`.
+impl std::fmt::Display for Line {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:<10}  {:<15}  {:2}  {:8}  {:8}  {:16.3}  {:8.2}",
+            self.ray_set, self.api, self.threads, self.rays, self.hits, self.tsum, self.mrays_per_s
+        )
+    }
 }
 
 #[cfg(test)]
@@ -445,11 +455,17 @@ mod tests {
         let mut lines = Vec::new();
         run(&tracer, &sets, &[1, 2], 1, |l| lines.push(l)).unwrap();
         assert_eq!(lines.len(), 3 * 3 * 2);
-        let apis: Vec<&str> = lines[..3]
-            .iter()
-            .map(|l| l.split_whitespace().nth(1).unwrap())
-            .collect();
+        let apis: Vec<&str> = lines[..3].iter().map(|l| l.api).collect();
         assert_eq!(apis, ["p3trace-single", "p3trace-packet8", "p3trace-best"]);
+        // The printed line has the protocol's seven fields.
+        let text = lines[0].to_string();
+        let fields: Vec<&str> = text.split_whitespace().collect();
+        let rays = sets[0].rays.len().to_string();
+        assert_eq!(
+            fields[..4],
+            ["primary", "p3trace-single", "1", rays.as_str()]
+        );
+        assert_eq!(fields.len(), 7);
     }
 
     #[test]

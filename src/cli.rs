@@ -9,7 +9,7 @@ use p3trace::render::light::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
 #[derive(Parser, Debug)]
 #[command(
     name = "p3trace",
-    version,
+    version = p3trace::machine::LONG_VERSION,
     about = "A fast Whitted and distribution ray tracer for P3F scenes (the P3D course format)",
     after_help = "Exit status: 0 success, 1 a render or I/O failure, 2 bad usage or a bad scene."
 )]
@@ -231,6 +231,11 @@ pub struct RenderArgs {
     /// Also print the structure's build time and statistics (with --quiet, only them).
     #[arg(long)]
     pub stats: bool,
+    /// Write the run's statistics as one JSON object to FILE, or to standard output for
+    /// `-` (the closing line then goes to stderr): version, commit, CPU, scene, size,
+    /// samples, structure, build and render seconds, rays by kind, Mrays/s.
+    #[arg(long, value_name = "FILE|-")]
+    pub json: Option<PathBuf>,
     #[command(flatten)]
     pub accel: AccelArgs,
 }
@@ -247,6 +252,11 @@ pub struct BenchArgs {
     #[arg(long, value_name = "N", default_value_t = 7,
           value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub reps: u32,
+    /// Also write the run as one JSON object to FILE, or to standard output for `-`
+    /// (the text lines then go to stderr): version, commit, CPU, scene, structure and
+    /// every protocol line.
+    #[arg(long, value_name = "FILE|-")]
+    pub json: Option<PathBuf>,
     #[command(flatten)]
     pub accel: AccelArgs,
 }

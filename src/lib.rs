@@ -13,6 +13,7 @@
 //! - [`limits`] holds the sizes accepted from files and the command line.
 //! - [`compare`] measures how two images differ.
 //! - [`bench`] runs the trace-throughput protocol of `../shared/bench/PROTOCOL.md`.
+//! - [`machine`] says what the binary was built for and what the CPU offers.
 
 // Tests like `!(x > 0.0)` are deliberate: they must also reject NaN, which `x <= 0.0` lets
 // through.
@@ -24,6 +25,7 @@ pub mod compare;
 pub mod generate;
 pub mod intersect;
 pub mod limits;
+pub mod machine;
 pub mod output;
 pub mod prim;
 pub mod ray;

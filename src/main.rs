@@ -2,6 +2,7 @@
 //! to exit codes (1 a render or I/O failure, 2 bad usage or a bad scene, 130 Ctrl-C).
 
 mod cli;
+mod statistics;
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -35,8 +36,9 @@ enum Failure {
 const INTERRUPTED: i32 = 130;
 
 fn main() -> ExitCode {
-    // A closed pipe ends the program quietly, as it does other command-line tools: Rust
-    // ignores SIGPIPE, so every `println!` into a closed pipe would panic instead.
+    // First, before any code that may use them: a CPU without the instructions the
+    // binary was compiled for would otherwise die of an illegal instruction.
+    p3trace::machine::check_cpu();
     #[cfg(unix)]
     // SAFETY: restoring a signal's default action, before any other thread exists.
     unsafe {
@@ -82,6 +84,15 @@ fn grouped(n: u64) -> String {
         out.push(digit);
     }
     out
+}
+
+/// Where the lines for people go: stdout, or stderr when `--json -` takes stdout.
+fn human_output(json: Option<&Path>) -> fn(&str) {
+    if json == Some(Path::new("-")) {
+        |line| eprintln!("{line}")
+    } else {
+        |line| println!("{line}")
+    }
 }
 
 /// `16 spp`, or `8 spp (4x2)` where the grid is not square.
@@ -172,29 +183,35 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
         eprintln!("p3trace: warning: {w}");
     }
     report.film.write(&output).map_err(Failure::Run)?;
+    let say = human_output(args.json.as_deref());
     if args.stats {
-        println!(
+        say(&format!(
             "{}: built in {:.3} s",
             report.accel_name,
             report.build_time.as_secs_f64()
-        );
+        ));
         for line in &report.accel_stats {
-            println!("  {line}");
+            say(&format!("  {line}"));
         }
     }
     if !args.quiet {
         let seconds = report.elapsed.as_secs_f64();
-        println!(
+        let rays = report.rays.total();
+        say(&format!(
             "{}: {}x{}, {}, {:.3} s, {} rays, {:.2} Mrays/s -> {}",
             scene.name,
             options.width,
             options.height,
             samples_label(options.sampling),
             seconds,
-            grouped(report.rays),
-            report.rays as f64 / 1e6 / seconds.max(1e-9),
+            grouped(rays),
+            rays as f64 / 1e6 / seconds.max(1e-9),
             output.display()
-        );
+        ));
+    }
+    if let Some(target) = &args.json {
+        let value = statistics::render(&scene, &options, &report, &output);
+        statistics::write(target, &value).map_err(Failure::Run)?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -330,42 +347,57 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     let scene = load_scene(&args.scene)?;
     let options = structure_options(accel_kind(args.accel.accel, &scene), &args.accel);
     let (accel, build_time) = Accel::build(&scene.geometry, &options);
-    let name = accel.name();
+    let (name, stats) = (accel.name(), accel.stats());
     let tracer = p3trace::accel::Tracer::new(&scene.geometry, accel);
     let sets = bench::ray_sets(&scene, &tracer);
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let cores = p3trace::machine::logical_cpus();
     let threads = args.threads.map_or(cores, |n| n as usize);
     let (width, height) = bench::resolution(&scene);
-    println!("# p3trace bench: trace-throughput protocol (PROTOCOL.md)");
-    println!("# scene {}", scene.name);
-    println!(
+    let say = human_output(args.json.as_deref());
+    say("# p3trace bench: trace-throughput protocol (PROTOCOL.md)");
+    say(&format!("# scene {}", scene.name));
+    say(&format!(
         "# geometry {} bounded objects, {} planes, {} lights",
         scene.geometry.bounded_count(),
-        scene.geometry.count(p3trace::prim::PrimKind::Plane),
+        scene.geometry.count(PrimKind::Plane),
         scene.lights.len()
-    );
-    println!(
+    ));
+    say(&format!(
         "# resolution {width}x{height} (scene {}x{})",
         scene.camera.width, scene.camera.height
-    );
-    println!(
+    ));
+    say(&format!(
         "# structure {name}, build_s {:.4}",
         build_time.as_secs_f64()
-    );
-    println!(
+    ));
+    say(&format!(
         "# cpu {}, {cores} logical CPUs; best of {} passes",
-        bench::cpu_model(),
+        p3trace::machine::cpu_model(),
         args.reps
-    );
-    println!("# ray-set  api  threads  rays  hits  tsum  mrays_per_s");
+    ));
+    say("# ray-set  api  threads  rays  hits  tsum  mrays_per_s");
     let mut thread_counts = vec![1];
     if threads > 1 {
         thread_counts.push(threads);
     }
+    let mut lines = Vec::new();
     bench::run(&tracer, &sets, &thread_counts, args.reps, |line| {
-        println!("{line}")
+        say(&line.to_string());
+        lines.push(line);
     })
     .map_err(Failure::Run)?;
+    if let Some(target) = &args.json {
+        let value = statistics::bench(&statistics::BenchRun {
+            scene: &scene,
+            resolution: (width, height),
+            structure: &name,
+            build_time,
+            stats: &stats,
+            reps: args.reps,
+            lines: &lines,
+        });
+        statistics::write(target, &value).map_err(Failure::Run)?;
+    }
     Ok(ExitCode::SUCCESS)
 }
 

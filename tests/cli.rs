@@ -542,3 +542,154 @@ fn any_sample_count_renders_as_the_squarest_grid() {
     assert_eq!(render(&centre, &[soft[0]], "ldefault.png").1, sixteen);
     assert_ne!(eight_lights, sixteen);
 }
+
+/// Reads a JSON document.
+fn json(text: &str) -> serde_json::Value {
+    serde_json::from_str(text).unwrap_or_else(|e| panic!("not JSON ({e}): {text}"))
+}
+
+#[test]
+fn render_and_bench_write_their_statistics_as_json() {
+    let dir = scratch("cli_json");
+    let image = dir.join("s.png").display().to_string();
+    let file = dir.join("s.json").display().to_string();
+    let render = |extra: &[&str]| {
+        let scene = showcase();
+        let mut args = vec!["render", &scene, "--resolution", "32x24", "-o", &image];
+        args.extend_from_slice(extra);
+        let run = p3trace(&args);
+        assert!(run.status.success(), "{}", stderr(&run));
+        run
+    };
+    let run = render(&["--json", &file, "--spp", "2"]);
+    let stats = json(&std::fs::read_to_string(&file).unwrap());
+    assert_eq!(stats["command"], "render");
+    assert_eq!(stats["program"]["version"], env!("CARGO_PKG_VERSION"));
+    assert!(stats["program"]["commit"]
+        .as_str()
+        .is_some_and(|c| !c.is_empty()));
+    assert!(stats["cpu"]["logical_cpus"].as_u64().unwrap() >= 1);
+    assert_eq!(stats["resolution"], serde_json::json!([32, 24]));
+    assert_eq!(stats["samples_per_pixel"], 2);
+    assert_eq!(stats["sample_grid"], serde_json::json!([2, 1]));
+    assert_eq!(stats["structure"]["name"], "bvh sah");
+    assert!(stats["render_s"].as_f64().unwrap() > 0.0);
+    let rays = &stats["rays"];
+    assert_eq!(rays["primary"], 32 * 24 * 2);
+    let kinds = ["primary", "shadow", "reflection", "refraction"];
+    let sum: u64 = kinds.iter().map(|k| rays[k].as_u64().unwrap()).sum();
+    assert_eq!(rays["total"], sum);
+    // The showcase has lights, mirrors and glass: every kind is traced.
+    assert!(
+        kinds.iter().all(|k| rays[k].as_u64().unwrap() > 0),
+        "{rays}"
+    );
+    // The closing line counts the same rays.
+    let total = rays["total"].as_u64().unwrap();
+    let digits = stdout(&run).replace(',', "");
+    assert!(digits.contains(&format!(" {total} rays")), "{digits}");
+
+    // To stdout with `-`, the people's line moves to stderr; scalar mode counts alike.
+    let run = render(&["--json", "-", "--spp", "2", "--mode", "scalar", "--stats"]);
+    let scalar = json(&stdout(&run));
+    assert_eq!(scalar["rays"], *rays);
+    assert_eq!(scalar["mode"], "scalar");
+    assert!(stderr(&run).contains(" rays, "), "{}", stderr(&run));
+    assert!(
+        stderr(&run).contains("bvh sah: built in"),
+        "{}",
+        stderr(&run)
+    );
+
+    // bench: every protocol line, the same as the text lines.
+    let run = p3trace(&[
+        "bench",
+        &showcase(),
+        "--reps",
+        "1",
+        "--threads",
+        "2",
+        "--json",
+        "-",
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let bench = json(&stdout(&run));
+    assert_eq!(bench["command"], "bench");
+    assert_eq!(bench["reps"], 1);
+    let lines = bench["lines"].as_array().unwrap();
+    let text: Vec<String> = stderr(&run)
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(str::to_string)
+        .collect();
+    assert_eq!(
+        lines.len(),
+        3 * 3 * 2,
+        "three sets, three paths, two thread counts"
+    );
+    assert_eq!(lines.len(), text.len());
+    for (line, text) in lines.iter().zip(&text) {
+        let fields: Vec<&str> = text.split_whitespace().collect();
+        assert_eq!(line["ray_set"], fields[0]);
+        assert_eq!(line["api"], fields[1]);
+        assert_eq!(line["threads"].to_string(), fields[2]);
+        assert_eq!(line["hits"].to_string(), fields[4]);
+    }
+}
+
+#[test]
+fn version_names_the_commit_and_the_instruction_set() {
+    let run = p3trace(&["--version"]);
+    assert!(run.status.success());
+    let text = stdout(&run);
+    let expected = format!("p3trace {} (commit ", env!("CARGO_PKG_VERSION"));
+    assert!(text.starts_with(&expected), "{text}");
+    assert!(text.contains("\ninstruction set: "), "{text}");
+    // The project's build (.cargo/config.toml) targets x86-64-v3.
+    if cfg!(target_feature = "avx2") {
+        assert!(text.contains("avx2") && text.contains("fma"), "{text}");
+    }
+}
+
+/// On a CPU without what the binary was compiled for, it names what is missing and exits
+/// 1 instead of dying of an illegal instruction. QEMU's user-mode emulator stands in for
+/// older CPUs (`.ci/run` installs it): Nehalem has no AVX, Sandy Bridge no AVX2.
+#[test]
+fn an_older_cpu_is_told_what_it_lacks() {
+    if !cfg!(target_feature = "avx2") {
+        eprintln!("skipped: this build does not use AVX2");
+        return;
+    }
+    let emulate = |cpu: &str, args: &[&str]| {
+        std::process::Command::new("qemu-x86_64")
+            .args(["-cpu", cpu, env!("CARGO_BIN_EXE_p3trace")])
+            .args(args)
+            .output()
+    };
+    let Ok(run) = emulate("Nehalem", &["render", &showcase(), "-o", "/dev/null"]) else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must install qemu-user for this test (see .ci/run)"
+        );
+        eprintln!("skipped: qemu-x86_64 is not installed (apt-get install qemu-user)");
+        return;
+    };
+    let message = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains("p3trace: error: this CPU lacks avx, avx2, bmi1, bmi2, fma"),
+        "{message}"
+    );
+    assert!(
+        message.contains("RUSTFLAGS='-C target-cpu=native'"),
+        "{message}"
+    );
+    let run = emulate("SandyBridge", &["--version"]).unwrap();
+    let message = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{message}");
+    assert!(message.contains("lacks avx2, bmi1"), "{message}");
+    assert!(!message.contains("lacks avx,"), "{message}");
+    // A CPU with everything runs it.
+    let run = emulate("Haswell", &["--version"]).unwrap();
+    assert!(run.status.success(), "{}", stderr(&run));
+}

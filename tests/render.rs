@@ -257,6 +257,7 @@ fn every_course_scene_but_the_dragon_renders() {
         (options.width, options.height) = (24, 24);
         let report = render(&scene, &options).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(report.warnings.is_empty(), "{name}: {:?}", report.warnings);
-        assert!(report.rays >= 24 * 24);
+        let samples = u64::from(options.sampling.samples_per_pixel());
+        assert_eq!(report.rays.primary, 24 * 24 * samples, "{name}");
     }
 }

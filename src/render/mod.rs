@@ -23,7 +23,7 @@ use crate::scene::Scene;
 use camera::Camera;
 use film::Film;
 use sampler::{dim, Sample, SampleGrid, SampleRng};
-use shade::{ShadeOptions, Shader, ShadowPacket};
+use shade::{RayCounts, RayKind, ShadeOptions, Shader, ShadowPacket};
 use skybox::Skybox;
 
 /// Tiles are square blocks of this many pixels a side: the unit of work of a thread.
@@ -137,10 +137,12 @@ impl RenderOptions {
 #[derive(Clone, Debug)]
 pub struct RenderReport {
     pub film: Film,
-    /// Every ray traced: primary, shadow and secondary.
-    pub rays: u64,
+    /// Every ray traced, by kind.
+    pub rays: RayCounts,
     /// Time spent rendering, after the structure was built.
     pub elapsed: Duration,
+    /// The worker threads that rendered.
+    pub threads: usize,
     pub build_time: Duration,
     /// The structure's name and statistics lines.
     pub accel_name: String,
@@ -193,7 +195,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
     };
 
     let start = Instant::now();
-    let rendered: Vec<(Tile, Vec<Vec3>, u64)> = pool.install(|| {
+    let rendered: Vec<(Tile, Vec<Vec3>, RayCounts)> = pool.install(|| {
         tiles
             .par_iter()
             .map(|&tile| {
@@ -205,9 +207,10 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
     });
     let elapsed = start.elapsed();
     progress.finish_and_clear();
+    let threads = pool.current_num_threads();
 
     let mut film = Film::new(options.width, options.height);
-    let mut rays = 0;
+    let mut rays = RayCounts::default();
     for (tile, pixels, tile_rays) in rendered {
         rays += tile_rays;
         for (k, colour) in pixels.into_iter().enumerate() {
@@ -223,6 +226,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         film,
         rays,
         elapsed,
+        threads,
         build_time,
         accel_name,
         accel_stats,
@@ -270,8 +274,8 @@ fn render_tile(
     camera: &Camera,
     options: &RenderOptions,
     tile: Tile,
-) -> (Vec<Vec3>, u64) {
-    let mut rays = 0;
+) -> (Vec<Vec3>, RayCounts) {
+    let mut rays = RayCounts::default();
     let (grid, jittered) = match options.sampling {
         Sampling::Centre => (SampleGrid::square(1), false),
         Sampling::Jittered(grid) => (grid, true),
@@ -334,7 +338,7 @@ fn trace_tile(
     sample_ray: &dyn Fn(u32, u32, u32, u32) -> (Ray, Sample),
     sums: &mut [Vec3],
     shadows: &mut [ShadowPacket],
-    rays: &mut u64,
+    rays: &mut RayCounts,
 ) {
     match options.mode {
         RenderMode::Scalar => {
@@ -346,7 +350,7 @@ fn trace_tile(
                 for q in 0..grid.rows {
                     for p in 0..grid.columns {
                         let (ray, sample) = sample_ray(x, y, p, q);
-                        *sum += shader.trace(&ray, &sample, 1, 1.0, rays);
+                        *sum += shader.trace(&ray, RayKind::Primary, &sample, 1, 1.0, rays);
                     }
                 }
             }

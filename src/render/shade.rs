@@ -46,6 +46,48 @@ impl Default for ShadeOptions {
     }
 }
 
+/// What a traced ray is for, as the statistics count it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayKind {
+    Primary,
+    Shadow,
+    Reflection,
+    Refraction,
+}
+
+/// The rays a render traced, by kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounts {
+    pub primary: u64,
+    pub shadow: u64,
+    pub reflection: u64,
+    pub refraction: u64,
+}
+
+impl RayCounts {
+    pub fn add(&mut self, kind: RayKind, rays: u64) {
+        *match kind {
+            RayKind::Primary => &mut self.primary,
+            RayKind::Shadow => &mut self.shadow,
+            RayKind::Reflection => &mut self.reflection,
+            RayKind::Refraction => &mut self.refraction,
+        } += rays;
+    }
+
+    pub fn total(&self) -> u64 {
+        self.primary + self.shadow + self.reflection + self.refraction
+    }
+}
+
+impl std::ops::AddAssign for RayCounts {
+    fn add_assign(&mut self, other: RayCounts) {
+        self.primary += other.primary;
+        self.shadow += other.shadow;
+        self.reflection += other.reflection;
+        self.refraction += other.refraction;
+    }
+}
+
 /// Everything a trace needs that stays fixed during a render.
 pub struct Shader<'a> {
     pub scene: &'a Scene,
@@ -84,18 +126,19 @@ impl<'a> Shader<'a> {
         }
     }
 
-    /// The colour seen along `ray`, which travels in a medium of index `ior_here` and
-    /// draws its random numbers from `sample`. `rays` counts every ray traced, this one
-    /// included.
+    /// The colour seen along `ray`, a ray of `kind` which travels in a medium of index
+    /// `ior_here` and draws its random numbers from `sample`. `rays` counts every ray
+    /// traced, this one included.
     pub fn trace(
         &self,
         ray: &Ray,
+        kind: RayKind,
         sample: &Sample,
         depth: u32,
         ior_here: f32,
-        rays: &mut u64,
+        rays: &mut RayCounts,
     ) -> Vec3 {
-        *rays += 1;
+        rays.add(kind, 1);
         let Some(hit) = self.tracer.closest(ray, 0.0, f32::INFINITY) else {
             return self.background(ray.dir);
         };
@@ -127,10 +170,10 @@ impl<'a> Shader<'a> {
         packet: &RayPacket,
         samples: &[Sample; 8],
         shadows: &mut [ShadowPacket],
-        rays: &mut u64,
+        rays: &mut RayCounts,
     ) -> [Vec3; 8] {
         let active = packet.active;
-        *rays += u64::from(active.count_ones());
+        rays.primary += u64::from(active.count_ones());
         let hits = self.tracer.closest_packet(packet);
         let primary = &packet.rays;
         let surfaces: [Option<Surface>; 8] =
@@ -179,7 +222,7 @@ impl<'a> Shader<'a> {
         surface: &Surface,
         depth: u32,
         ior_here: f32,
-        rays: &mut u64,
+        rays: &mut RayCounts,
         shadow_of: &mut impl FnMut(usize) -> Option<(ShadowRay, bool)>,
     ) -> Vec3 {
         let Surface { p, nf, inside } = *surface;
@@ -197,7 +240,14 @@ impl<'a> Shader<'a> {
                 dir: self.fuzz(mirror, nf, &reflected.rng),
                 time: ray.time,
             };
-            self.trace(&ray, &reflected, depth + 1, ior_here, rays)
+            self.trace(
+                &ray,
+                RayKind::Reflection,
+                &reflected,
+                depth + 1,
+                ior_here,
+                rays,
+            )
         };
         if material.transmittance > 0.0 {
             let ior_next = if inside { 1.0 } else { material.ior };
@@ -223,8 +273,14 @@ impl<'a> Shader<'a> {
                         dir: (eta * ray.dir + (eta * cos_i - cos_t) * nf).normalize(),
                         time: ray.time,
                     };
-                    let seen =
-                        self.trace(&transmitted, &sample.spawn(1), depth + 1, ior_next, rays);
+                    let seen = self.trace(
+                        &transmitted,
+                        RayKind::Refraction,
+                        &sample.spawn(1),
+                        depth + 1,
+                        ior_next,
+                        rays,
+                    );
                     colour += (1.0 - kr) * material.diffuse * seen;
                 }
             }
@@ -270,7 +326,7 @@ impl<'a> Shader<'a> {
         ray: &Ray,
         nf: Vec3,
         m: &Material,
-        rays: &mut u64,
+        rays: &mut RayCounts,
         shadow_of: &mut impl FnMut(usize) -> Option<(ShadowRay, bool)>,
     ) -> Vec3 {
         let mut colour = Vec3::ZERO;
@@ -278,7 +334,7 @@ impl<'a> Shader<'a> {
             let Some((shadow, blocked)) = shadow_of(light) else {
                 continue;
             };
-            *rays += 1;
+            rays.shadow += 1;
             if blocked {
                 continue;
             }
@@ -414,7 +470,7 @@ mod tests {
 
     /// Traces one ray from `origin` inside a glass sphere of radius 1 (ior 1.5, `Kd` 0,
     /// white `Cs`, no lights) with `max_depth` 2; returns its colour and the rays taken.
-    fn trace_inside_glass(origin: Vec3, dir: Vec3) -> (Vec3, u64) {
+    fn trace_inside_glass(origin: Vec3, dir: Vec3) -> (Vec3, RayCounts) {
         let text = "bclr 0.2 0.4 0.6\nf 1 1 1 0 1 1 1 0 1 1 1.5\ns 0 0 0 1";
         let scene = crate::scene::p3f::parse_text(text).unwrap();
         let tracer = Tracer::new(&scene.geometry, crate::accel::Accel::None);
@@ -423,9 +479,10 @@ mod tests {
             ..ShadeOptions::default()
         };
         let shader = Shader::new(&scene, &tracer, None, options, false);
-        let mut rays = 0;
+        let mut rays = RayCounts::default();
         let colour = shader.trace(
             &Ray::new(origin, dir),
+            RayKind::Primary,
             &Sample {
                 rng: SampleRng::new(0, 0, 7),
                 cell: [0, 0],
@@ -441,7 +498,13 @@ mod tests {
     #[test]
     fn refraction_spawns_a_reflected_and_a_transmitted_ray() {
         let (colour, rays) = trace_inside_glass(Vec3::ZERO, Vec3::X);
-        assert_eq!(rays, 3);
+        let expected_rays = RayCounts {
+            primary: 1,
+            reflection: 1,
+            refraction: 1,
+            shadow: 0,
+        };
+        assert_eq!(rays, expected_rays);
         // The transmitted ray sees the background with weight 1 - Kr = 0.96 (normal
         // incidence); the reflected one stays inside and, at the depth limit, is black.
         let expected = 0.96 * Vec3::new(0.2, 0.4, 0.6);
@@ -453,7 +516,7 @@ mod tests {
         // From (0, 0.9, 0) along +x the ray meets the surface at about 64 degrees, beyond
         // the critical angle of 41.8 degrees (the course code had no guard here).
         let (colour, rays) = trace_inside_glass(Vec3::new(0.0, 0.9, 0.0), Vec3::X);
-        assert_eq!(rays, 2);
+        assert_eq!((rays.primary, rays.reflection, rays.refraction), (1, 1, 0));
         // The reflected ray stays inside and, at the depth limit, is black.
         assert_eq!(colour, Vec3::ZERO);
     }

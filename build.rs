@@ -1,0 +1,59 @@
+//! Build facts for `p3trace --version` and the JSON statistics: the commit the binary is
+//! built from and the instruction set it is compiled for.
+
+use std::path::Path;
+use std::process::Command;
+
+fn main() {
+    let git = |args: &[&str]| {
+        Command::new("git")
+            .args(args)
+            .output()
+            .ok()
+            .filter(|out| out.status.success())
+            .map(|out| String::from_utf8_lossy(&out.stdout).trim().to_string())
+    };
+    // Outside a git checkout (a source package) the commit is unknown.
+    let commit = git(&["rev-parse", "--short=12", "HEAD"]).unwrap_or_else(|| "unknown".into());
+    println!("cargo:rustc-env=P3TRACE_COMMIT={commit}");
+    // A commit or a checkout rewrites HEAD or the branch it names: build again then.
+    let mut watched = vec!["HEAD".to_string(), "packed-refs".to_string()];
+    watched.extend(git(&["symbolic-ref", "-q", "HEAD"]));
+    for name in watched {
+        if let Some(path) = git(&["rev-parse", "--git-path", &name]) {
+            if Path::new(&path).exists() {
+                println!("cargo:rerun-if-changed={path}");
+            }
+        }
+    }
+    println!("cargo:rerun-if-changed=build.rs");
+
+    let features = std::env::var("CARGO_CFG_TARGET_FEATURE").unwrap_or_default();
+    println!(
+        "cargo:rustc-env=P3TRACE_TARGET_FEATURES={}",
+        features.replace(',', ", ")
+    );
+    let flags = std::env::var("CARGO_ENCODED_RUSTFLAGS").unwrap_or_default();
+    // `-C target-cpu=X` arrives as one flag or as two (`-C`, `target-cpu=X`).
+    let cpu = flags
+        .split('\x1f')
+        .find_map(|flag| flag.trim_start_matches("-C").strip_prefix("target-cpu="))
+        .unwrap_or("the target's default")
+        .to_string();
+    println!("cargo:rustc-env=P3TRACE_TARGET_CPU={cpu}");
+
+    // The CPU check, compiled for the x86-64 baseline whatever the Rust code targets.
+    if std::env::var("CARGO_CFG_TARGET_ARCH").as_deref() == Ok("x86_64") {
+        let features = features.replace(',', ", ");
+        cc::Build::new()
+            .file("src/cpu_check.c")
+            .flag("-march=x86-64")
+            .define(
+                "P3TRACE_TARGET_FEATURES",
+                format!("\"{features}\"").as_str(),
+            )
+            .define("P3TRACE_TARGET_CPU", format!("\"{cpu}\"").as_str())
+            .compile("cpu_check");
+        println!("cargo:rerun-if-changed=src/cpu_check.c");
+    }
+}

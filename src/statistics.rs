@@ -1,0 +1,127 @@
+//! The machine-readable statistics of `render --json` and `bench --json`: one JSON object
+//! per run, with the program and the machine, the scene, the structure, the timings and
+//! the rays.
+
+use std::io::Write;
+use std::path::Path;
+use std::time::Duration;
+
+use p3trace::bench::Line;
+use p3trace::machine;
+use p3trace::render::{RenderOptions, RenderReport, Sampling};
+use p3trace::scene::Scene;
+use serde_json::{json, Value};
+
+/// The program (version, commit, the instruction set it was compiled for) and the CPU.
+fn program_and_cpu() -> (Value, Value) {
+    let program = json!({
+        "name": "p3trace",
+        "version": machine::VERSION,
+        "commit": machine::COMMIT,
+        "target_cpu": machine::TARGET_CPU,
+        "target_features": machine::TARGET_FEATURES.split(", ").collect::<Vec<_>>(),
+    });
+    let cpu = json!({
+        "model": machine::cpu_model(),
+        "logical_cpus": machine::logical_cpus(),
+        "features": machine::cpu_features(),
+    });
+    (program, cpu)
+}
+
+fn structure(name: &str, build_time: Duration, stats: &[String]) -> Value {
+    json!({ "name": name, "build_s": build_time.as_secs_f64(), "stats": stats })
+}
+
+/// A finished render of `scene` with `options`, written to `output`.
+pub fn render(
+    scene: &Scene,
+    options: &RenderOptions,
+    report: &RenderReport,
+    output: &Path,
+) -> Value {
+    let (program, cpu) = program_and_cpu();
+    let grid = match options.sampling {
+        Sampling::Centre => [1, 1],
+        Sampling::Jittered(grid) => [grid.columns, grid.rows],
+    };
+    let rays = &report.rays;
+    let seconds = report.elapsed.as_secs_f64();
+    json!({
+        "program": program,
+        "cpu": cpu,
+        "command": "render",
+        "scene": scene.name,
+        "output": output.display().to_string(),
+        "resolution": [options.width, options.height],
+        "samples_per_pixel": options.sampling.samples_per_pixel(),
+        "sample_grid": grid,
+        "mode": format!("{:?}", options.mode).to_lowercase(),
+        "threads": report.threads,
+        "structure": structure(&report.accel_name, report.build_time, &report.accel_stats),
+        "render_s": seconds,
+        "rays": {
+            "primary": rays.primary,
+            "shadow": rays.shadow,
+            "reflection": rays.reflection,
+            "refraction": rays.refraction,
+            "total": rays.total(),
+        },
+        "mrays_per_s": rays.total() as f64 / 1e6 / seconds.max(1e-9),
+    })
+}
+
+/// A run of the benchmark protocol: its settings and every line it printed.
+pub struct BenchRun<'a> {
+    pub scene: &'a Scene,
+    pub resolution: (u32, u32),
+    pub structure: &'a str,
+    pub build_time: Duration,
+    pub stats: &'a [String],
+    pub reps: u32,
+    pub lines: &'a [Line],
+}
+
+pub fn bench(run: &BenchRun) -> Value {
+    let (program, cpu) = program_and_cpu();
+    let lines: Vec<Value> = run
+        .lines
+        .iter()
+        .map(|l| {
+            json!({
+                "ray_set": l.ray_set,
+                "api": l.api,
+                "threads": l.threads,
+                "rays": l.rays,
+                "hits": l.hits,
+                "tsum": l.tsum,
+                "mrays_per_s": l.mrays_per_s,
+            })
+        })
+        .collect();
+    json!({
+        "program": program,
+        "cpu": cpu,
+        "command": "bench",
+        "scene": run.scene.name,
+        "resolution": [run.resolution.0, run.resolution.1],
+        "structure": structure(run.structure, run.build_time, run.stats),
+        "reps": run.reps,
+        "lines": lines,
+    })
+}
+
+/// Writes `value` to `target`, a file (replaced only once complete) or standard output
+/// for `-`, with a final newline.
+pub fn write(target: &Path, value: &Value) -> Result<(), String> {
+    let write_to = |out: &mut dyn Write| {
+        serde_json::to_writer_pretty(&mut *out, value)?;
+        writeln!(out)
+    };
+    if target == Path::new("-") {
+        write_to(&mut std::io::stdout().lock())
+            .map_err(|e| format!("cannot write the statistics: {e}"))
+    } else {
+        p3trace::output::write_atomically(target, |out| write_to(out))
+    }
+}
