@@ -225,7 +225,9 @@ pub struct RenderArgs {
     /// scalar (one at a time, the reference). Both give the same image byte for byte.
     #[arg(long, value_enum, value_name = "MODE", default_value_t = ModeChoice::Packet)]
     pub mode: ModeChoice,
-    /// No progress bar and no closing statistics line (warnings still go to stderr).
+    /// No progress and no closing statistics line (warnings still go to stderr). Without
+    /// it, progress shows as a bar on a terminal, and elsewhere (a log, CI) as a plain
+    /// line at every tenth of the tiles and at least every 10 s.
     #[arg(short, long)]
     pub quiet: bool,
     /// Also print the structure's build time and statistics (with --quiet, only them).

@@ -19,6 +19,7 @@ use p3trace::accel::{BvhBuild, BvhWidth};
 use p3trace::generate::{dragon, mountain, random, skybox, sphereflake};
 use p3trace::prim::PrimKind;
 use p3trace::render::film::OutputFormat;
+use p3trace::render::progress::Progress;
 use p3trace::render::sampler::SampleGrid;
 use p3trace::render::{self, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::{self, Light, Scene};
@@ -174,7 +175,11 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
         ModeChoice::Packet => RenderMode::Packet,
         ModeChoice::Scalar => RenderMode::Scalar,
     };
-    options.progress = !args.quiet && std::io::stderr().is_terminal();
+    options.progress = match (args.quiet, std::io::stderr().is_terminal()) {
+        (true, _) => Progress::Hidden,
+        (false, true) => Progress::Bar,
+        (false, false) => Progress::Lines,
+    };
     options.accel = accel_options(&scene, &args.accel);
     options.check_size().map_err(Failure::Usage)?;
 

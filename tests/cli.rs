@@ -693,3 +693,35 @@ fn an_older_cpu_is_told_what_it_lacks() {
     let run = emulate("Haswell", &["--version"]).unwrap();
     assert!(run.status.success(), "{}", stderr(&run));
 }
+
+/// Where stderr is not a terminal (a farm's log, CI, this test), progress shows as plain
+/// lines, one per tenth of the tiles (or every 10 s); `--quiet` keeps them away.
+#[test]
+fn progress_shows_as_lines_where_stderr_is_not_a_terminal() {
+    let dir = scratch("cli_progress");
+    let out = dir.join("s.png").display().to_string();
+    let scene = showcase();
+    // 320 x 240 is 20 x 15 tiles of 16 pixels.
+    let args = ["render", &scene, "--resolution", "320x240", "-o", &out];
+    let run = p3trace(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let lines: Vec<String> = stderr(&run)
+        .lines()
+        .filter(|l| l.starts_with("progress: "))
+        .map(str::to_string)
+        .collect();
+    // One line per tenth, printed by the first tile to reach it (30, or 31 when two
+    // threads finish together).
+    assert_eq!(lines.len(), 10, "{lines:?}");
+    assert!(lines[0].starts_with("progress: 10% ("), "{lines:?}");
+    assert!(
+        lines[9].starts_with("progress: 100% (300 of 300 tiles), "),
+        "{lines:?}"
+    );
+    assert!(lines
+        .iter()
+        .all(|l| l.contains(" s elapsed, about ") && l.ends_with(" s left")));
+    let quiet = p3trace(&[&args[..], &["--quiet"]].concat());
+    assert!(quiet.status.success());
+    assert!(!stderr(&quiet).contains("progress"), "{}", stderr(&quiet));
+}

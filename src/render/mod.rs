@@ -4,6 +4,7 @@
 pub mod camera;
 pub mod film;
 pub mod light;
+pub mod progress;
 pub mod sampler;
 pub mod shade;
 pub mod skybox;
@@ -13,7 +14,6 @@ use std::time::{Duration, Instant};
 
 use bumpalo::Bump;
 use glam::{Vec2, Vec3};
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use crate::accel::{Accel, AccelKind, AccelOptions, Tracer};
@@ -22,6 +22,7 @@ use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::scene::Scene;
 use camera::Camera;
 use film::Film;
+use progress::{Meter, Progress};
 use sampler::{dim, Sample, SampleGrid, SampleRng};
 use shade::{RayCounts, RayKind, ShadeOptions, Shader, ShadowPacket};
 use skybox::Skybox;
@@ -89,8 +90,8 @@ pub struct RenderOptions {
     /// Worker threads; `None` uses every core.
     pub threads: Option<usize>,
     pub seed: u64,
-    /// Show a progress bar on stderr.
-    pub progress: bool,
+    /// How progress shows on stderr.
+    pub progress: Progress,
     /// The acceleration structure and how to build it.
     pub accel: AccelOptions,
     pub mode: RenderMode,
@@ -113,7 +114,7 @@ impl RenderOptions {
             skybox: true,
             threads: None,
             seed: 0,
-            progress: false,
+            progress: Progress::Hidden,
             accel: AccelOptions {
                 kind: scene.accel.unwrap_or(AccelKind::Bvh),
                 ..AccelOptions::default()
@@ -183,30 +184,20 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         .build()
         .map_err(|e| format!("cannot start the worker threads: {e}"))?;
     let tiles = tiles(options.width, options.height);
-    let progress = if options.progress {
-        let bar = ProgressBar::new(tiles.len() as u64);
-        bar.set_style(
-            ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {percent:>3}% eta {eta}")
-                .expect("the template is valid"),
-        );
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
-
+    let progress = Meter::new(options.progress, tiles.len());
     let start = Instant::now();
     let rendered: Vec<(Tile, Vec<Vec3>, RayCounts)> = pool.install(|| {
         tiles
             .par_iter()
             .map(|&tile| {
                 let (pixels, rays) = render_tile(&shader, &camera, options, tile);
-                progress.inc(1);
+                progress.tile_done();
                 (tile, pixels, rays)
             })
             .collect()
     });
     let elapsed = start.elapsed();
-    progress.finish_and_clear();
+    progress.finish();
     let threads = pool.current_num_threads();
 
     let mut film = Film::new(options.width, options.height);
