@@ -11,7 +11,8 @@ use p3trace::render::light::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
     name = "p3trace",
     version,
     about = "A fast Whitted and distribution ray tracer for P3F scenes (the P3D course format)",
-    after_help = "Exit status: 0 success, 1 a render or I/O failure, 2 bad usage or a bad scene."
+    after_help = "Exit status: 0 success, 1 a render or I/O failure, 2 bad usage or a bad scene, \
+                  130 interrupted (Ctrl-C, SIGTERM or SIGHUP)."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -41,6 +42,14 @@ pub enum Command {
     /// Write one of the project's generated scenes as P3F, or its procedural skybox.
     #[command(subcommand)]
     Gen(GenCommand),
+    /// Print the completion script for SHELL (the README says where to put it).
+    Completions {
+        /// The shell that will read the script.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the man page, in roff (the README says where to put it).
+    Man,
 }
 
 #[derive(Subcommand, Debug)]

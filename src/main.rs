@@ -2,12 +2,13 @@
 //! to exit codes (1 a render or I/O failure, 2 bad usage or a bad scene, 130 Ctrl-C).
 
 mod cli;
+mod manual;
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use clap::Parser;
+use clap::{CommandFactory, Parser};
 
 use cli::{
     AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand,
@@ -56,6 +57,13 @@ fn main() -> ExitCode {
         Command::Compare(args) => run_compare(&args),
         Command::Gen(command) => run_gen(command),
         Command::Bench(args) => run_bench(&args),
+        Command::Completions { shell } => write_to_stdout(
+            &manual::completion_script(Cli::command(), shell),
+            "the completion script",
+        ),
+        Command::Man => {
+            write_to_stdout(manual::man_page(Cli::command()).as_bytes(), "the man page")
+        }
     };
     match result {
         Ok(code) => code,
@@ -407,13 +415,21 @@ fn run_gen(command: GenCommand) -> Result<ExitCode, Failure> {
         }
     };
     match &out.output {
-        Some(path) => p3trace::output::write_atomically(path, |w| w.write_all(text.as_bytes()))
-            .map_err(Failure::Run)?,
-        None => std::io::stdout()
-            .lock()
-            .write_all(text.as_bytes())
-            .map_err(|e| Failure::Run(format!("cannot write the scene: {e}")))?,
+        Some(path) => {
+            p3trace::output::write_atomically(path, |w| w.write_all(text.as_bytes()))
+                .map_err(Failure::Run)?;
+            Ok(ExitCode::SUCCESS)
+        }
+        None => write_to_stdout(text.as_bytes(), "the scene"),
     }
+}
+
+/// Writes `bytes` to standard output; `what` names them in the message should it fail.
+fn write_to_stdout(bytes: &[u8], what: &str) -> Result<ExitCode, Failure> {
+    std::io::stdout()
+        .lock()
+        .write_all(bytes)
+        .map_err(|e| Failure::Run(format!("cannot write {what}: {e}")))?;
     Ok(ExitCode::SUCCESS)
 }
 

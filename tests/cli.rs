@@ -504,3 +504,46 @@ fn the_closing_line_counts_rays_exactly_and_stats_combine_with_quiet() {
     assert!(stats.starts_with("bvh sah: built in"), "{stats}");
     assert!(!stats.contains(" rays, "), "{stats}");
 }
+
+#[test]
+fn completions_name_the_commands_and_their_flags() {
+    // How each shell's script spells the option --accel.
+    for (shell, accel) in [
+        ("bash", "--accel"),
+        ("zsh", "'--accel="),
+        ("fish", "-l accel"),
+    ] {
+        let out = p3trace(&["completions", shell]);
+        assert!(out.status.success(), "{shell}: {}", stderr(&out));
+        let script = stdout(&out);
+        for word in ["render", "compare", "skybox", accel, "bvh-width"] {
+            assert!(script.contains(word), "the {shell} script lacks '{word}'");
+        }
+    }
+    let out = p3trace(&["completions", "tcsh"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn man_page_documents_every_command() {
+    let out = p3trace(&["man"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let page = stdout(&out);
+    let first_macro = page
+        .lines()
+        .find(|line| !line.starts_with(".ie") && !line.starts_with(".el"))
+        .unwrap();
+    assert!(first_macro.starts_with(".TH p3trace 1"), "{first_macro}");
+    for heading in [
+        ".SH \"P3TRACE RENDER\"",
+        ".SH \"P3TRACE COMPARE\"",
+        ".SH \"P3TRACE GEN BALLS\"",
+        ".SH \"EXIT STATUS\"",
+    ] {
+        assert!(page.contains(heading), "the man page lacks {heading}");
+    }
+    assert!(
+        page.contains(r"\fB\-\-accel\fR"),
+        "no --accel in the man page"
+    );
+}
