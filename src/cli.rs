@@ -332,6 +332,12 @@ pub struct CompareArgs {
     /// Percentage of pixels that must match for the images to count as equal.
     #[arg(long, value_name = "PERCENT", default_value_t = 100.0)]
     pub min_match: f64,
+    /// Also write a heat map of where the images differ: each pixel's largest channel
+    /// difference, black where equal, then blue, red and yellow up to white at the largest
+    /// difference found (the output line gives it in levels). The extension picks the
+    /// format: .png, .ppm or .hdr.
+    #[arg(long, value_name = "FILE")]
+    pub diff: Option<PathBuf>,
 }
 
 /// A number in `range`; `what` names it in the message.

@@ -303,14 +303,23 @@ fn run_info(path: &Path, accel_args: &AccelArgs) -> Result<ExitCode, Failure> {
 }
 
 fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
+    // Refuse a bad name for the heat map before reading the images.
+    if let Some(path) = &args.diff {
+        OutputFormat::from_path(path).map_err(Failure::Usage)?;
+    }
     let a = p3trace::compare::load(&args.first).map_err(Failure::Usage)?;
     let b = p3trace::compare::load(&args.second).map_err(Failure::Usage)?;
     let c = p3trace::compare::compare(&a, &b, args.tolerance).map_err(Failure::Usage)?;
     let share = 100.0 * c.within_tolerance;
     println!("size: {}x{}", c.width, c.height);
     println!("psnr: {:.2} dB", c.psnr);
+    println!("ssim: {:.4}", c.ssim);
     println!("max channel difference: {} levels", c.max_difference);
     println!("pixels within {} levels: {share:.3}%", args.tolerance);
+    if let Some(path) = &args.diff {
+        c.heat_map().write(path).map_err(Failure::Run)?;
+        println!("diff: {} ({})", path.display(), c.heat_map_scale());
+    }
     if share + 1e-9 < args.min_match {
         println!(
             "differ: fewer than {}% of pixels within the tolerance",
