@@ -11,7 +11,8 @@ use p3trace::render::light::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
     name = "p3trace",
     version = p3trace::machine::LONG_VERSION,
     about = "A fast Whitted and distribution ray tracer for P3F scenes (the P3D course format)",
-    after_help = "Exit status: 0 success, 1 a render or I/O failure, 2 bad usage or a bad scene."
+    after_help = "Exit status: 0 success, 1 a render or I/O failure, 2 bad usage or a bad scene, \
+                  130 interrupted (Ctrl-C, SIGTERM or SIGHUP)."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -41,6 +42,14 @@ pub enum Command {
     /// Write one of the project's generated scenes as P3F, or its procedural skybox.
     #[command(subcommand)]
     Gen(GenCommand),
+    /// Print the completion script for SHELL (the README says where to put it).
+    Completions {
+        /// The shell that will read the script.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the man page, in roff (the README says where to put it).
+    Man,
 }
 
 #[derive(Subcommand, Debug)]
@@ -340,6 +349,12 @@ pub struct CompareArgs {
     /// Percentage of pixels that must match for the images to count as equal.
     #[arg(long, value_name = "PERCENT", default_value_t = 100.0)]
     pub min_match: f64,
+    /// Also write a heat map of where the images differ: each pixel's largest channel
+    /// difference, black where equal, then blue, red and yellow up to white at the largest
+    /// difference found (the output line gives it in levels). The extension picks the
+    /// format: .png, .ppm or .hdr.
+    #[arg(long, value_name = "FILE")]
+    pub diff: Option<PathBuf>,
 }
 
 /// A number in `range`; `what` names it in the message.

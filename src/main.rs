@@ -2,13 +2,14 @@
 //! to exit codes (1 a render or I/O failure, 2 bad usage or a bad scene, 130 Ctrl-C).
 
 mod cli;
+mod manual;
 mod statistics;
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use clap::Parser;
+use clap::{CommandFactory, Parser};
 
 use cli::{
     AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand,
@@ -60,6 +61,13 @@ fn main() -> ExitCode {
         Command::Compare(args) => run_compare(&args),
         Command::Gen(command) => run_gen(command),
         Command::Bench(args) => run_bench(&args),
+        Command::Completions { shell } => write_to_stdout(
+            &manual::completion_script(Cli::command(), shell),
+            "the completion script",
+        ),
+        Command::Man => {
+            write_to_stdout(manual::man_page(Cli::command()).as_bytes(), "the man page")
+        }
     };
     match result {
         Ok(code) => code,
@@ -328,14 +336,23 @@ fn run_info(path: &Path, accel_args: &AccelArgs) -> Result<ExitCode, Failure> {
 }
 
 fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
+    // Refuse a bad name for the heat map before reading the images.
+    if let Some(path) = &args.diff {
+        OutputFormat::from_path(path).map_err(Failure::Usage)?;
+    }
     let a = p3trace::compare::load(&args.first).map_err(Failure::Usage)?;
     let b = p3trace::compare::load(&args.second).map_err(Failure::Usage)?;
     let c = p3trace::compare::compare(&a, &b, args.tolerance).map_err(Failure::Usage)?;
     let share = 100.0 * c.within_tolerance;
     println!("size: {}x{}", c.width, c.height);
     println!("psnr: {:.2} dB", c.psnr);
+    println!("ssim: {:.4}", c.ssim);
     println!("max channel difference: {} levels", c.max_difference);
     println!("pixels within {} levels: {share:.3}%", args.tolerance);
+    if let Some(path) = &args.diff {
+        c.heat_map().write(path).map_err(Failure::Run)?;
+        println!("diff: {} ({})", path.display(), c.heat_map_scale());
+    }
     if share + 1e-9 < args.min_match {
         println!(
             "differ: fewer than {}% of pixels within the tolerance",
@@ -455,13 +472,21 @@ fn run_gen(command: GenCommand) -> Result<ExitCode, Failure> {
         }
     };
     match &out.output {
-        Some(path) => p3trace::output::write_atomically(path, |w| w.write_all(text.as_bytes()))
-            .map_err(Failure::Run)?,
-        None => std::io::stdout()
-            .lock()
-            .write_all(text.as_bytes())
-            .map_err(|e| Failure::Run(format!("cannot write the scene: {e}")))?,
+        Some(path) => {
+            p3trace::output::write_atomically(path, |w| w.write_all(text.as_bytes()))
+                .map_err(Failure::Run)?;
+            Ok(ExitCode::SUCCESS)
+        }
+        None => write_to_stdout(text.as_bytes(), "the scene"),
     }
+}
+
+/// Writes `bytes` to standard output; `what` names them in the message should it fail.
+fn write_to_stdout(bytes: &[u8], what: &str) -> Result<ExitCode, Failure> {
+    std::io::stdout()
+        .lock()
+        .write_all(bytes)
+        .map_err(|e| Failure::Run(format!("cannot write {what}: {e}")))?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -36,7 +36,7 @@ fn help_explains_every_flag() {
         assert!(help.contains(flag), "render --help does not mention {flag}");
     }
     let top = stdout(&p3trace(&["--help"]));
-    for command in ["render", "info", "compare"] {
+    for command in ["render", "info", "compare", "completions", "man"] {
         assert!(top.contains(command));
     }
 }
@@ -724,4 +724,118 @@ fn progress_shows_as_lines_where_stderr_is_not_a_terminal() {
     let quiet = p3trace(&[&args[..], &["--quiet"]].concat());
     assert!(quiet.status.success());
     assert!(!stderr(&quiet).contains("progress"), "{}", stderr(&quiet));
+}
+
+#[test]
+fn completions_name_the_commands_and_their_flags() {
+    // How each shell's script spells the option --accel.
+    for (shell, accel) in [
+        ("bash", "--accel"),
+        ("zsh", "'--accel="),
+        ("fish", "-l accel"),
+    ] {
+        let out = p3trace(&["completions", shell]);
+        assert!(out.status.success(), "{shell}: {}", stderr(&out));
+        let script = stdout(&out);
+        for word in ["render", "compare", "skybox", accel, "bvh-width"] {
+            assert!(script.contains(word), "the {shell} script lacks '{word}'");
+        }
+    }
+    let out = p3trace(&["completions", "tcsh"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn man_page_documents_every_command() {
+    let out = p3trace(&["man"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let page = stdout(&out);
+    let first_macro = page
+        .lines()
+        .find(|line| !line.starts_with(".ie") && !line.starts_with(".el"))
+        .unwrap();
+    assert!(first_macro.starts_with(".TH p3trace 1"), "{first_macro}");
+    for heading in [
+        ".SH \"P3TRACE RENDER\"",
+        ".SH \"P3TRACE COMPARE\"",
+        ".SH \"P3TRACE GEN BALLS\"",
+        ".SH \"EXIT STATUS\"",
+    ] {
+        assert!(page.contains(heading), "the man page lacks {heading}");
+    }
+    assert!(
+        page.contains(r"\fB\-\-accel\fR"),
+        "no --accel in the man page"
+    );
+}
+
+#[test]
+fn compare_draws_where_images_differ_and_gives_ssim() {
+    let dir = scratch("cli_compare_diff");
+    let (a, b) = (dir.join("a.png"), dir.join("b.png"));
+    let gradient = |x: u32, y: u32| image::Rgb([20 * x as u8, 40 * y as u8, 100]);
+    image::RgbImage::from_fn(5, 3, gradient).save(&a).unwrap();
+    let mut changed = image::RgbImage::from_fn(5, 3, gradient);
+    changed.get_pixel_mut(1, 1).0[1] += 3;
+    changed.get_pixel_mut(4, 2).0[2] -= 30;
+    changed.save(&b).unwrap();
+    let map = dir.join("diff.png");
+    let (a, b, map_arg) = (
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        map.to_str().unwrap(),
+    );
+
+    let out = p3trace(&["compare", a, b, "--diff", map_arg]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let printed = stdout(&out);
+    assert!(printed.contains("ssim: 0."), "{printed}");
+    assert!(
+        printed.contains(&format!(
+            "diff: {map_arg} (black 0 levels, then blue, red, yellow, white 30 levels)"
+        )),
+        "{printed}"
+    );
+    let heat = image::open(&map).unwrap().to_rgb8();
+    assert_eq!(heat.dimensions(), (5, 3));
+    for (x, y, pixel) in heat.enumerate_pixels() {
+        match (x, y) {
+            (4, 2) => assert_eq!(pixel.0, [255, 255, 255], "the largest difference"),
+            (1, 1) => assert_ne!(pixel.0, [0, 0, 0], "a difference of 3 levels"),
+            _ => assert_eq!(pixel.0, [0, 0, 0], "equal pixel ({x}, {y})"),
+        }
+    }
+
+    let same = p3trace(&["compare", a, a, "--diff", map_arg]);
+    assert!(same.status.success(), "{}", stderr(&same));
+    assert!(stdout(&same).contains("ssim: 1.0000"), "{}", stdout(&same));
+    assert!(
+        stdout(&same).contains("(all black: no pixel differs)"),
+        "{}",
+        stdout(&same)
+    );
+    let heat = image::open(&map).unwrap().to_rgb8();
+    assert!(heat.pixels().all(|p| p.0 == [0, 0, 0]));
+
+    let gif = dir.join("diff.gif");
+    let bad = p3trace(&["compare", a, b, "--diff", gif.to_str().unwrap()]);
+    assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
+    assert!(stderr(&bad).contains("cannot tell the image format"));
+    assert!(!gif.exists());
+    let unwritable = p3trace(&["compare", a, b, "--diff", "/nonexistent-dir/diff.png"]);
+    assert_eq!(unwritable.status.code(), Some(1), "{}", stderr(&unwritable));
+    assert!(stderr(&unwritable).contains("cannot write"));
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        3,
+        "no partial file left"
+    );
+
+    let help = stdout(&p3trace(&["compare", "--help"]));
+    for flag in ["--tolerance", "--min-match", "--diff"] {
+        assert!(
+            help.contains(flag),
+            "compare --help does not mention {flag}"
+        );
+    }
 }
