@@ -229,24 +229,16 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The structure the command line asks for (by default the fastest); with `--accel
-/// file`, the file's, with a note on stderr when its `accel 0` makes a large scene slow.
+/// The structure the command line asks for (by default the fastest, whatever the file
+/// says), with its build settings.
 fn accel_options(scene: &Scene, args: &AccelArgs) -> AccelOptions {
-    if args.accel == AccelChoice::File {
-        let objects = scene.geometry.bounded_count();
-        if scene.accel == Some(AccelKind::None) && objects > SLOW_WITHOUT_ACCEL {
-            eprintln!(
-                "p3trace: note: {} asks for no acceleration structure ('accel 0') over \
-                 {objects} objects; --accel auto would be much faster",
-                scene.name
-            );
-        }
-    }
-    structure_options(accel_kind(args.accel, scene), args)
-}
-
-/// The options of structure `kind`, with the build settings of `args`.
-fn structure_options(kind: AccelKind, args: &AccelArgs) -> AccelOptions {
+    let kind = match args.accel {
+        AccelChoice::Auto => AccelKind::Bvh,
+        AccelChoice::File => scene.accel.unwrap_or(AccelKind::Bvh),
+        AccelChoice::None => AccelKind::None,
+        AccelChoice::Grid => AccelKind::Grid,
+        AccelChoice::Bvh => AccelKind::Bvh,
+    };
     AccelOptions {
         kind,
         bvh: match args.bvh {
@@ -262,20 +254,6 @@ fn structure_options(kind: AccelKind, args: &AccelArgs) -> AccelOptions {
         ..AccelOptions::default()
     }
 }
-
-/// The structure `choice` names for `scene`.
-fn accel_kind(choice: AccelChoice, scene: &Scene) -> AccelKind {
-    match choice {
-        AccelChoice::Auto => AccelKind::Bvh,
-        AccelChoice::File => scene.accel.unwrap_or(AccelKind::Bvh),
-        AccelChoice::None => AccelKind::None,
-        AccelChoice::Grid => AccelKind::Grid,
-        AccelChoice::Bvh => AccelKind::Bvh,
-    }
-}
-
-/// Above this many objects, brute force is much slower than a structure.
-const SLOW_WITHOUT_ACCEL: usize = 300;
 
 fn run_info(path: &Path, accel_args: &AccelArgs) -> Result<ExitCode, Failure> {
     let scene = load_scene(path)?;
@@ -367,7 +345,7 @@ fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
 fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     use p3trace::bench;
     let scene = load_scene(&args.scene)?;
-    let options = structure_options(accel_kind(args.accel.accel, &scene), &args.accel);
+    let options = accel_options(&scene, &args.accel);
     let (accel, build_time) = Accel::build(&scene.geometry, &options);
     let (name, stats) = (accel.name(), accel.stats());
     let tracer = p3trace::accel::Tracer::new(&scene.geometry, accel);

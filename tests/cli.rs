@@ -321,7 +321,7 @@ fn accel_choice_notes_and_statistics() {
         "{}",
         stderr(&default)
     );
-    // `--accel file` follows it, and says what that costs.
+    // `--accel file` follows it, without a word: the user asked for it.
     let asked_none = render(&["--accel", "file", "--stats"]);
     assert!(asked_none.status.success(), "{}", stderr(&asked_none));
     assert!(
@@ -330,8 +330,7 @@ fn accel_choice_notes_and_statistics() {
         stdout(&asked_none)
     );
     assert!(
-        stderr(&asked_none)
-            .contains("'accel 0') over 822 objects; --accel auto would be much faster"),
+        !stderr(&asked_none).contains("accel 0"),
         "{}",
         stderr(&asked_none)
     );
