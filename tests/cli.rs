@@ -453,7 +453,17 @@ fn a_missing_scene_file_says_why_and_exits_1() {
 fn a_closed_pipe_ends_the_output_quietly() {
     use std::process::{Command, Stdio};
     let scene = common::project_file("scenes/showcase.p3f");
-    for args in [vec!["info", scene.to_str().unwrap()], vec!["gen", "random"]] {
+    let scene = scene.to_str().unwrap();
+    let image = common::project_file("docs/gallery/random.png");
+    let image = image.to_str().unwrap();
+    for args in [
+        vec!["info", scene],
+        vec!["gen", "random"],
+        vec!["bench", scene, "--reps", "1", "--threads", "1"],
+        vec!["compare", image, image],
+        vec!["man"],
+        vec!["completions", "bash"],
+    ] {
         let mut child = Command::new(env!("CARGO_BIN_EXE_p3trace"))
             .args(&args)
             .stdout(Stdio::piped())
