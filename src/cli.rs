@@ -179,9 +179,15 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N")]
     pub spp: Option<u32>,
     /// Depth at which rays stop spawning reflection and refraction rays (primary rays
-    /// have depth 1).
-    #[arg(long, value_name = "N", default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=64))]
-    pub max_depth: u32,
+    /// have depth 1). Default: the profile's, 6 (standard) or 8 (course).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub max_depth: Option<u32>,
+    /// The shading model: standard (P3F.md section 4) or course (section 11: the course
+    /// renderer's own, which reproduces its reference images: the background seen by a
+    /// ray of depth d that misses is dimmed by min(1, 1 / (0.7 (d - 1))), skybox
+    /// included, and the maximum depth is 8).
+    #[arg(long, value_enum, value_name = "PROFILE", default_value_t = ProfileChoice::Standard)]
+    pub profile: ProfileChoice,
     /// Use Schlick's approximation instead of the exact Fresnel equations.
     #[arg(long)]
     pub schlick: bool,
@@ -296,6 +302,12 @@ pub struct AccelArgs {
     /// Grid only: test an object that spans several cells once per ray (mailboxing).
     #[arg(long)]
     pub mailbox: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ProfileChoice {
+    Standard,
+    Course,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

@@ -13,7 +13,7 @@ use clap::{CommandFactory, Parser};
 
 use cli::{
     AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand,
-    ModeChoice, RenderArgs, SceneOutput, UpAxis,
+    ModeChoice, ProfileChoice, RenderArgs, SceneOutput, UpAxis,
 };
 use p3trace::accel::{Accel, AccelKind, AccelOptions};
 use p3trace::accel::{BvhBuild, BvhWidth};
@@ -22,6 +22,7 @@ use p3trace::prim::PrimKind;
 use p3trace::render::film::OutputFormat;
 use p3trace::render::progress::Progress;
 use p3trace::render::sampler::SampleGrid;
+use p3trace::render::shade::Profile;
 use p3trace::render::{self, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::{self, Light, Scene};
 
@@ -168,7 +169,13 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     if let Some(n) = args.spp {
         options.sampling = Sampling::from_samples_per_pixel(n).map_err(Failure::Usage)?;
     }
-    options.shade.max_depth = args.max_depth;
+    options.shade = options.shade.with_profile(match args.profile {
+        ProfileChoice::Standard => Profile::Standard,
+        ProfileChoice::Course => Profile::Course,
+    });
+    if let Some(depth) = args.max_depth {
+        options.shade.max_depth = depth;
+    }
     options.shade.schlick = args.schlick;
     options.shade.soft_light_size = args.soft_shadows.then_some(args.light_size);
     options.shade.light_grid = SampleGrid::with_cells(args.light_samples);

@@ -57,6 +57,8 @@ pub fn render(
         "samples_per_pixel": options.sampling.samples_per_pixel(),
         "sample_grid": grid,
         "mode": format!("{:?}", options.mode).to_lowercase(),
+        "profile": format!("{:?}", options.shade.profile).to_lowercase(),
+        "max_depth": options.shade.max_depth,
         "threads": report.threads,
         "structure": structure(&report.accel_name, report.build_time, &report.accel_stats),
         "render_s": seconds,

@@ -32,6 +32,9 @@ fn help_explains_every_flag() {
         "--light-samples",
         "--roughness",
         "--shutter",
+        "--profile",
+        "--json",
+        "--stats",
     ] {
         assert!(help.contains(flag), "render --help does not mention {flag}");
     }
@@ -847,4 +850,34 @@ fn compare_draws_where_images_differ_and_gives_ssim() {
             "compare --help does not mention {flag}"
         );
     }
+}
+
+/// `--profile course` is P3F.md section 11's model, with its maximum depth of 8 unless
+/// `--max-depth` says otherwise; it dims what deep rays see of the background.
+#[test]
+fn the_course_profile_takes_its_depth_unless_told_otherwise() {
+    let dir = scratch("cli_profile");
+    let scene = showcase();
+    let render = |extra: &[&str], name: &str| {
+        let image = dir.join(format!("{name}.png")).display().to_string();
+        let mut args = vec!["render", &scene, "--resolution", "48x36", "-o", &image];
+        args.extend_from_slice(&["--json", "-"]);
+        args.extend_from_slice(extra);
+        let run = p3trace(&args);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let stats = json(&stdout(&run));
+        let setting = (
+            stats["profile"].to_string(),
+            stats["max_depth"].as_u64().unwrap(),
+        );
+        (setting, std::fs::read(&image).unwrap())
+    };
+    let (standard, standard_image) = render(&[], "standard");
+    assert_eq!(standard, ("\"standard\"".to_string(), 6));
+    let (course, course_image) = render(&["--profile", "course"], "course");
+    assert_eq!(course, ("\"course\"".to_string(), 8));
+    let (shallow, _) = render(&["--profile", "course", "--max-depth", "3"], "shallow");
+    assert_eq!(shallow, ("\"course\"".to_string(), 3));
+    // The showcase's mirror and glass see the sky through rays of depth 3 and more.
+    assert_ne!(standard_image, course_image);
 }

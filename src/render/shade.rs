@@ -1,7 +1,8 @@
 //! Whitted shading exactly as P3F.md section 4: Blinn-Phong with `Katt`, shadows, mirror
 //! reflection, refraction with Fresnel (or Schlick), total internal reflection, and a
-//! clamp of every returned colour; and fuzzy reflections (P3F.md 6.4). Which point of each
-//! light a hit sees is for [`super::light`] to say.
+//! clamp of every returned colour; and fuzzy reflections (P3F.md 6.4). The `course`
+//! [`Profile`] is section 11's model of the course's own renderer instead. Which point of
+//! each light a hit sees is for [`super::light`] to say.
 
 use glam::Vec3;
 
@@ -19,8 +20,41 @@ pub const EPS: f32 = 1e-4;
 /// The report's roughness when fuzzy reflections are asked for without a value.
 pub const DEFAULT_ROUGHNESS: f32 = 0.2;
 
+/// Which model of shading: P3F.md section 4, or the course renderer's of section 11.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Profile {
+    /// P3F.md section 4, with a maximum depth of 6.
+    #[default]
+    Standard,
+    /// P3F.md section 11, which reproduces the course's reference images: the background
+    /// seen by a ray of depth d that misses is dimmed by `min(1, 1 / (0.7 (d - 1)))`,
+    /// and the maximum depth is 8.
+    Course,
+}
+
+impl Profile {
+    /// The depth at which rays stop spawning others, unless the options say otherwise.
+    pub fn max_depth(self) -> u32 {
+        match self {
+            Profile::Standard => 6,
+            Profile::Course => 8,
+        }
+    }
+
+    /// The factor of the background (colour or skybox) seen by a ray of `depth` that
+    /// hits nothing.
+    pub fn background_factor(self, depth: u32) -> f32 {
+        match self {
+            Profile::Course if depth > 2 => 1.0 / (0.7 * (depth - 1) as f32),
+            _ => 1.0,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadeOptions {
+    /// The shading model; [`ShadeOptions::with_profile`] also takes its maximum depth.
+    pub profile: Profile,
     /// Rays at this depth return their local colour only (primary rays have depth 1).
     pub max_depth: u32,
     /// Schlick's approximation instead of the exact Fresnel equations.
@@ -37,11 +71,23 @@ pub struct ShadeOptions {
 impl Default for ShadeOptions {
     fn default() -> Self {
         ShadeOptions {
-            max_depth: 6,
+            profile: Profile::Standard,
+            max_depth: Profile::Standard.max_depth(),
             schlick: false,
             soft_light_size: None,
             light_grid: DEFAULT_LIGHT_GRID,
             roughness: 0.0,
+        }
+    }
+}
+
+impl ShadeOptions {
+    /// These options with `profile` and its maximum depth.
+    pub fn with_profile(self, profile: Profile) -> Self {
+        ShadeOptions {
+            profile,
+            max_depth: profile.max_depth(),
+            ..self
         }
     }
 }
@@ -140,7 +186,7 @@ impl<'a> Shader<'a> {
     ) -> Vec3 {
         rays.add(kind, 1);
         let Some(hit) = self.tracer.closest(ray, 0.0, f32::INFINITY) else {
-            return self.background(ray.dir);
+            return self.background(ray.dir, depth);
         };
         let surface = self.surface(ray, &hit);
         let shadow_of = &mut |light| {
@@ -201,7 +247,7 @@ impl<'a> Shader<'a> {
             }
             let ray = &primary[k];
             let Some((hit, surface)) = hits[k].zip(surfaces[k]) else {
-                return self.background(ray.dir);
+                return self.background(ray.dir, 1);
             };
             let shadow_of = &mut |light: usize| shadows[light].lane(k);
             self.shade(ray, &samples[k], &hit, &surface, 1, 1.0, rays, shadow_of)
@@ -375,11 +421,13 @@ impl<'a> Shader<'a> {
         })
     }
 
-    fn background(&self, dir: Vec3) -> Vec3 {
-        match self.skybox {
+    /// What a ray of `depth` along `dir` that hits nothing sees.
+    fn background(&self, dir: Vec3, depth: u32) -> Vec3 {
+        let colour = match self.skybox {
             Some(sky) => sky.lookup(dir),
             None => self.scene.background,
-        }
+        };
+        colour * self.options.profile.background_factor(depth)
     }
 }
 
@@ -519,6 +567,56 @@ mod tests {
         assert_eq!((rays.primary, rays.reflection, rays.refraction), (1, 1, 0));
         // The reflected ray stays inside and, at the depth limit, is black.
         assert_eq!(colour, Vec3::ZERO);
+    }
+
+    /// The course profile dims what a ray of depth d > 2 that misses sees, background
+    /// colour or skybox alike, by 1 / (0.7 (d - 1)); the standard profile never does.
+    #[test]
+    fn the_course_profile_dims_the_background_of_deep_rays() {
+        assert_eq!(Profile::Course.max_depth(), 8);
+        let factors: Vec<f32> = (1..=7)
+            .map(|d| Profile::Course.background_factor(d))
+            .collect();
+        let expected = [
+            1.0,
+            1.0,
+            5.0 / 7.0,
+            10.0 / 21.0,
+            5.0 / 14.0,
+            2.0 / 7.0,
+            5.0 / 21.0,
+        ];
+        for (f, e) in factors.iter().zip(expected) {
+            assert!((f - e).abs() < 1e-6, "{factors:?}");
+        }
+        let scene = crate::scene::p3f::parse_text("bclr 0.2 0.4 0.6").unwrap();
+        let tracer = Tracer::new(&scene.geometry, crate::accel::Accel::None);
+        let sky_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sky_yup");
+        let sky = Skybox::load(&sky_dir).unwrap();
+        let dir = Vec3::new(0.3, 0.5, -0.8).normalize();
+        let sample = Sample {
+            rng: SampleRng::new(0, 0, 7),
+            cell: [0, 0],
+            grid: SampleGrid::square(1),
+        };
+        for skybox in [None, Some(&sky)] {
+            let seen = skybox.map_or(scene.background, |sky| sky.lookup(dir));
+            for profile in [Profile::Standard, Profile::Course] {
+                let options = ShadeOptions::default().with_profile(profile);
+                let shader = Shader::new(&scene, &tracer, skybox, options, false);
+                for depth in 1..=7 {
+                    let mut rays = RayCounts::default();
+                    let ray = Ray::new(Vec3::ZERO, dir);
+                    let colour =
+                        shader.trace(&ray, RayKind::Reflection, &sample, depth, 1.0, &mut rays);
+                    let expected = match profile {
+                        Profile::Standard => seen,
+                        Profile::Course => seen * Profile::Course.background_factor(depth),
+                    };
+                    assert_eq!(colour, expected, "{profile:?} at depth {depth}");
+                }
+            }
+        }
     }
 
     /// A shader over an empty scene, for the direction helpers.
