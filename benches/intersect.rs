@@ -6,7 +6,9 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
-use p3trace::intersect::{self, BoxPack8, BoxRay, BoxRay8, SpherePack8, TrianglePack8};
+use p3trace::intersect::{
+    self, BoxPack8, BoxRay, BoxRay8, SpherePack8, SphereRoots, TrianglePack8,
+};
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::simd::F32x8;
 
@@ -85,7 +87,17 @@ fn packets(c: &mut Criterion) {
     let (bmin, bmax) = (Vec3::splat(-1.0), Vec3::ONE);
 
     c.bench_function("packet/sphere/simd", |b| {
-        b.iter(|| intersect::sphere_packet(black_box(&packet), Vec3::ZERO, 1.0, lo, hi, 0xFF))
+        b.iter(|| {
+            intersect::sphere_packet(
+                black_box(&packet),
+                Vec3::ZERO,
+                1.0,
+                SphereRoots::Precise,
+                lo,
+                hi,
+                0xFF,
+            )
+        })
     });
     c.bench_function("packet/sphere/scalar x8", |b| {
         b.iter(|| {

@@ -5,7 +5,9 @@
 //! padding slots must miss.
 
 use glam::Vec3;
-use p3trace::intersect::{self, BoxPack8, BoxRay, BoxRay8, Intervals8, SpherePack8, TrianglePack8};
+use p3trace::intersect::{
+    self, BoxPack8, BoxRay, BoxRay8, Intervals8, SpherePack8, SphereRoots, TrianglePack8,
+};
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::simd::{F32x8, Mask8};
 use proptest::prelude::*;
@@ -171,15 +173,33 @@ fn when(active: bool, answer: Option<f32>) -> Option<f32> {
 
 const CASES: u32 = 2000;
 
+/// Both forms of the sphere's quadratic.
+fn roots() -> impl Strategy<Value = SphereRoots> {
+    prop_oneof![Just(SphereRoots::Precise), Just(SphereRoots::Textbook)]
+}
+
+/// The scalar sphere test of `roots`: the twin of the kernels.
+fn scalar_sphere(roots: SphereRoots, ray: &Ray, c: Vec3, r: f32, lo: f32, hi: f32) -> Option<f32> {
+    match roots {
+        SphereRoots::Precise => intersect::sphere(ray, c, r, lo, hi),
+        SphereRoots::Textbook => intersect::sphere_textbook(ray, c, r, lo, hi),
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(CASES))]
 
     #[test]
-    fn sphere_packet_equals_scalar(p in packet(), centre in point(), r in radius()) {
+    fn sphere_packet_equals_scalar(
+        p in packet(),
+        centre in point(),
+        r in radius(),
+        roots in roots(),
+    ) {
         let (rays, t_min, t_max, active) = p.soa();
-        let (hit, t) = intersect::sphere_packet(&rays, centre, r, t_min, t_max, active);
+        let (hit, t) = intersect::sphere_packet(&rays, centre, r, roots, t_min, t_max, active);
         for (i, ray) in p.rays.iter().enumerate() {
-            let scalar = intersect::sphere(ray, centre, r, p.t_min[i], p.t_max[i]);
+            let scalar = scalar_sphere(roots, ray, centre, r, p.t_min[i], p.t_max[i]);
             same("sphere", i, when(p.active(i), scalar), hit, t);
         }
     }
@@ -259,13 +279,14 @@ proptest! {
         ray in ray(),
         (t_min, t_max) in interval(),
         spheres in prop::collection::vec((point(), radius()), 0..=8),
+        roots in roots(),
     ) {
-        let pack = SpherePack8::new(&spheres);
+        let pack = SpherePack8::new(&spheres).with_roots(roots);
         let (hit, t) = intersect::sphere_leaf(&ray, &pack, t_min, t_max);
         for i in 0..8 {
             let scalar = spheres
                 .get(i)
-                .and_then(|&(c, r)| intersect::sphere(&ray, c, r, t_min, t_max));
+                .and_then(|&(c, r)| scalar_sphere(roots, &ray, c, r, t_min, t_max));
             same("sphere leaf", i, scalar, hit, t);
         }
     }

@@ -35,7 +35,9 @@ pub use cone::{cone, cone_normal, cone_packet, Cones};
 pub use interval::{beyond, widen_entry, widen_exit, BoxRay, BoxRay8, Intervals8};
 pub use moving_sphere::MovingSpheres;
 pub use plane::{plane, plane_packet, Planes};
-pub use sphere::{sphere, sphere_leaf, sphere_packet, SpherePack8, Spheres};
+pub use sphere::{
+    sphere, sphere_leaf, sphere_packet, sphere_textbook, SpherePack8, SphereRoots, Spheres,
+};
 pub use triangle::{
     triangle, triangle_leaf, triangle_packet, TriangleHit, TriangleHit8, TrianglePack8, Triangles,
 };

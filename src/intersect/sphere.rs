@@ -1,5 +1,6 @@
 //! The sphere kind: its storage ([`Spheres`]), the ray-sphere test and its SIMD twins
-//! (eight rays against one sphere; one ray against a [`SpherePack8`] of a BVH leaf).
+//! (eight rays against one sphere; one ray against a [`SpherePack8`] of a BVH leaf), each
+//! in two forms of the quadratic ([`SphereRoots`]).
 
 use glam::Vec3;
 
@@ -8,6 +9,18 @@ use super::{packet_hits, packet_interval, Aabb, Shapes, TriangleHit, Vec3s};
 
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
+
+/// How the sphere test solves its quadratic.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SphereRoots {
+    /// The discriminant from the perpendicular distance and the near root as `c / q`
+    /// ([`sphere`]): precise for small spheres seen from afar and large ones from close by.
+    #[default]
+    Precise,
+    /// The textbook form `b -+ sqrt(b^2 - c)` ([`sphere_textbook`]), as the course's
+    /// renderer solved it in single precision; the `course` profile (P3F.md 11) uses it.
+    Textbook,
+}
 
 /// Ray-sphere test. The report's early exit comes first: an origin outside the sphere with
 /// the centre behind it is a miss before the discriminant is computed. The discriminant is
@@ -32,19 +45,48 @@ pub fn sphere(ray: &Ray, centre: Vec3, radius: f32, t_min: f32, t_max: f32) -> O
     first_root_in(near, far, t_min, t_max)
 }
 
+/// [`sphere`] with the textbook quadratic: `disc = b^2 - c` and the roots `b -+ sqrt(disc)`.
+/// For a sphere of radius r at distance D, `b^2` and `c` are about D^2 and their
+/// difference about r^2, so single precision loses most of it: for the sphereflake's
+/// smallest spheres (r = 0.0062, D about 3) the hit lands about 1e-4 off the surface,
+/// as far as the ray offset, and some hits shadow themselves. The course's reference
+/// images carry exactly that (P3F.md 11; README, "Matching the course's references").
+pub fn sphere_textbook(
+    ray: &Ray,
+    centre: Vec3,
+    radius: f32,
+    t_min: f32,
+    t_max: f32,
+) -> Option<f32> {
+    let oc = centre - ray.origin;
+    let b = oc.dot(ray.dir);
+    let c = oc.dot(oc) - radius * radius;
+    if c > 0.0 && b < 0.0 {
+        return None;
+    }
+    let disc = b * b - c;
+    if !(disc >= 0.0 && radius > 0.0) {
+        return None;
+    }
+    let root = disc.sqrt();
+    first_root_in(b - root, b + root, t_min, t_max)
+}
+
 /// Eight spheres side by side for [`sphere_leaf`]. Unused slots hold
 /// [`SpherePack8::PAD_RADIUS`] (0), which the test rejects for every ray, NaN included.
 #[derive(Clone, Copy, Debug)]
 pub struct SpherePack8 {
     pub centre: Vec3x8,
     pub radius: F32x8,
+    pub roots: SphereRoots,
 }
 
 impl SpherePack8 {
     /// The radius of a padding slot (its centre is the origin): never hit.
     pub const PAD_RADIUS: f32 = 0.0;
 
-    /// Packs up to eight `(centre, radius)` pairs, padding the rest.
+    /// Packs up to eight `(centre, radius)` pairs, padding the rest, for the precise test
+    /// (see [`SpherePack8::with_roots`]).
     ///
     /// # Panics
     /// If given more than eight spheres.
@@ -58,47 +100,59 @@ impl SpherePack8 {
             radius: F32x8::from_array(std::array::from_fn(|i| {
                 slot(i).map_or(Self::PAD_RADIUS, |s| s.1)
             })),
+            roots: SphereRoots::Precise,
         }
+    }
+
+    /// This pack, tested with the quadratic `roots`.
+    pub fn with_roots(self, roots: SphereRoots) -> Self {
+        SpherePack8 { roots, ..self }
     }
 }
 
-/// [`sphere`] for eight rays against one sphere; lanes outside `active` miss.
+/// [`sphere`], or [`sphere_textbook`] as `roots` says, for eight rays against one
+/// sphere; lanes outside `active` miss.
 pub fn sphere_packet(
     rays: &RayPacket,
     centre: Vec3,
     radius: f32,
+    roots: SphereRoots,
     t_min: F32x8,
     t_max: F32x8,
     active: u8,
 ) -> (Mask8, F32x8) {
-    let (hit, t) = sphere_lanes(
-        rays.origin,
-        rays.dir,
-        Vec3x8::splat(centre),
-        F32x8::splat(radius),
-        t_min,
-        t_max,
-    );
+    let (centre, radius) = (Vec3x8::splat(centre), F32x8::splat(radius));
+    let (hit, t) = match roots {
+        SphereRoots::Precise => {
+            sphere_lanes::<false>(rays.origin, rays.dir, centre, radius, t_min, t_max)
+        }
+        SphereRoots::Textbook => {
+            sphere_lanes::<true>(rays.origin, rays.dir, centre, radius, t_min, t_max)
+        }
+    };
     (hit & Mask8::from_bitmask(active), t)
 }
 
-/// [`sphere`] for one ray against the eight spheres of a pack.
+/// [`sphere`], or [`sphere_textbook`] as the pack says, for one ray against the eight
+/// spheres of a pack.
 #[inline]
 pub fn sphere_leaf(ray: &Ray, pack: &SpherePack8, t_min: f32, t_max: f32) -> (Mask8, F32x8) {
-    sphere_lanes(
-        Vec3x8::splat(ray.origin),
-        Vec3x8::splat(ray.dir),
-        pack.centre,
-        pack.radius,
-        F32x8::splat(t_min),
-        F32x8::splat(t_max),
-    )
+    let (origin, dir) = (Vec3x8::splat(ray.origin), Vec3x8::splat(ray.dir));
+    let (t_min, t_max) = (F32x8::splat(t_min), F32x8::splat(t_max));
+    match pack.roots {
+        SphereRoots::Precise => {
+            sphere_lanes::<false>(origin, dir, pack.centre, pack.radius, t_min, t_max)
+        }
+        SphereRoots::Textbook => {
+            sphere_lanes::<true>(origin, dir, pack.centre, pack.radius, t_min, t_max)
+        }
+    }
 }
 
-/// The body of [`sphere`], lane by lane: both branches are computed and the early exits
-/// become masks.
+/// The body of [`sphere`] (or, with `TEXTBOOK`, of [`sphere_textbook`]), lane by lane:
+/// both branches are computed and the early exits become masks.
 #[inline(always)]
-fn sphere_lanes(
+fn sphere_lanes<const TEXTBOOK: bool>(
     origin: Vec3x8,
     dir: Vec3x8,
     centre: Vec3x8,
@@ -111,13 +165,19 @@ fn sphere_lanes(
     let b = oc.dot(dir);
     let c = oc.dot(oc) - radius * radius;
     let behind = c.gt(zero) & b.lt(zero);
-    let perpendicular = oc - dir.scale(b);
-    let disc = radius * radius - perpendicular.dot(perpendicular);
+    let (disc, near, far) = if TEXTBOOK {
+        let disc = b * b - c;
+        let root = disc.sqrt();
+        (disc, b - root, b + root)
+    } else {
+        let perpendicular = oc - dir.scale(b);
+        let disc = radius * radius - perpendicular.dot(perpendicular);
+        let q = b + disc.sqrt().copysign(b);
+        let (r0, r1) = (c / q, q);
+        let ordered = r0.le(r1);
+        (disc, ordered.select(r0, r1), ordered.select(r1, r0))
+    };
     let real = (disc.ge(zero) & radius.gt(zero)).and_not(behind);
-    let q = b + disc.sqrt().copysign(b);
-    let (r0, r1) = (c / q, q);
-    let ordered = r0.le(r1);
-    let (near, far) = (ordered.select(r0, r1), ordered.select(r1, r0));
     let (hit, t) = first_root_in8(near, far, t_min, t_max);
     (hit & real, t)
 }
@@ -127,6 +187,8 @@ pub struct Spheres {
     pub centre: Vec3s,
     pub radius: Vec<f32>,
     pub material: Vec<u32>,
+    /// The form of the quadratic every test of these spheres takes.
+    pub roots: SphereRoots,
 }
 
 impl Spheres {
@@ -135,7 +197,7 @@ impl Spheres {
         let spheres: Vec<(Vec3, f32)> = indices
             .map(|i| (self.centre.get(i), self.radius[i]))
             .collect();
-        SpherePack8::new(&spheres)
+        SpherePack8::new(&spheres).with_roots(self.roots)
     }
 }
 
@@ -165,7 +227,12 @@ impl Shapes for Spheres {
         t_min: f32,
         t_max: f32,
     ) -> Option<TriangleHit> {
-        sphere(ray, self.centre.get(i), self.radius[i], t_min, t_max).map(TriangleHit::at)
+        let (centre, radius) = (self.centre.get(i), self.radius[i]);
+        match self.roots {
+            SphereRoots::Precise => sphere(ray, centre, radius, t_min, t_max),
+            SphereRoots::Textbook => sphere_textbook(ray, centre, radius, t_min, t_max),
+        }
+        .map(TriangleHit::at)
     }
 
     fn intersect_packet(
@@ -180,6 +247,7 @@ impl Shapes for Spheres {
             packet,
             self.centre.get(i),
             self.radius[i],
+            self.roots,
             lo,
             hi,
             active,

@@ -17,6 +17,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::accel::{Accel, AccelKind, AccelOptions, Tracer};
+use crate::intersect::SphereRoots;
 use crate::limits::{check_image_size, MAX_SPP_SIDE};
 use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::scene::Scene;
@@ -172,9 +173,19 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         shutter: options.shutter,
         ..options.accel
     };
-    let (accel, build_time) = Accel::build(&scene.geometry, &accel_options);
+    // The course profile tests spheres as the course's renderer did, on a copy of the
+    // geometry that says so.
+    let course_geometry;
+    let geometry = match options.shade.profile.sphere_roots() {
+        SphereRoots::Precise => &scene.geometry,
+        roots => {
+            course_geometry = scene.geometry.with_sphere_roots(roots);
+            &course_geometry
+        }
+    };
+    let (accel, build_time) = Accel::build(geometry, &accel_options);
     let (accel_name, accel_stats) = (accel.name(), accel.stats());
-    let tracer = Tracer::new(&scene.geometry, accel);
+    let tracer = Tracer::new(geometry, accel);
     let jittered = matches!(options.sampling, Sampling::Jittered(_));
     let shader = Shader::new(scene, &tracer, skybox.as_ref(), options.shade, jittered);
     let camera = Camera::new(&scene.camera, options.width, options.height);

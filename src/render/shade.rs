@@ -10,6 +10,7 @@ use super::light::{emitters, Emitter, DEFAULT_LIGHT_GRID};
 use super::sampler::{dim, Sample, SampleGrid, SampleRng};
 use super::skybox::Skybox;
 use crate::accel::Tracer;
+use crate::intersect::SphereRoots;
 use crate::ray::{lane_mask, Hit, Ray, RayPacket};
 use crate::scene::{Material, Scene};
 
@@ -28,7 +29,7 @@ pub enum Profile {
     Standard,
     /// P3F.md section 11, which reproduces the course's reference images: the background
     /// seen by a ray of depth d that misses is dimmed by `min(1, 1 / (0.7 (d - 1)))`,
-    /// and the maximum depth is 8.
+    /// the maximum depth is 8, and spheres are tested with the textbook quadratic.
     Course,
 }
 
@@ -38,6 +39,15 @@ impl Profile {
         match self {
             Profile::Standard => 6,
             Profile::Course => 8,
+        }
+    }
+
+    /// How spheres are tested: the course's renderer solved the textbook quadratic in
+    /// single precision, whose error on the smallest spheres its images show.
+    pub fn sphere_roots(self) -> SphereRoots {
+        match self {
+            Profile::Standard => SphereRoots::Precise,
+            Profile::Course => SphereRoots::Textbook,
         }
     }
 

@@ -6,7 +6,7 @@
 use glam::Vec3;
 
 use crate::intersect::{
-    Aabb, Boxes, Cones, MovingSpheres, Planes, Shapes, Spheres, TriangleHit, Triangles,
+    Aabb, Boxes, Cones, MovingSpheres, Planes, Shapes, SphereRoots, Spheres, TriangleHit, Triangles,
 };
 use crate::prim::{prim_kinds, PrimId, PrimKind};
 use crate::ray::{Ray, RayPacket};
@@ -88,6 +88,13 @@ macro_rules! define_geometry {
 prim_kinds!(define_geometry);
 
 impl Geometry {
+    /// A copy whose spheres are tested with the quadratic `roots`.
+    pub fn with_sphere_roots(&self, roots: SphereRoots) -> Geometry {
+        let mut geometry = self.clone();
+        geometry.spheres.roots = roots;
+        geometry
+    }
+
     /// The ids of every primitive of `kind`.
     pub fn ids(&self, kind: PrimKind) -> impl Iterator<Item = PrimId> {
         (0..self.count(kind) as u32).map(move |i| PrimId::new(kind, i))
