@@ -7,6 +7,7 @@ use std::path::Path;
 
 use common::render_scene;
 use glam::Vec3;
+use p3trace::accel::{AccelKind, BvhWidth};
 use p3trace::compare;
 use p3trace::render::film::{to_byte, Film};
 use p3trace::render::sampler::SampleGrid;
@@ -46,6 +47,37 @@ fn packet_and_scalar_modes_give_the_same_image() {
             assert!(scalar == packet, "{name} ({profile:?}): the modes differ");
         }
     }
+}
+
+/// The course profile's textbook sphere roots reach every structure: brute force, the
+/// grid and both BVH widths give one image of the project's sphereflake.
+#[test]
+fn the_course_profile_gives_one_image_with_every_structure() {
+    let scene = parse_file(&common::project_file("scenes/balls_high.p3f")).unwrap();
+    let structures = [
+        (AccelKind::None, None),
+        (AccelKind::Grid, None),
+        (AccelKind::Bvh, Some(BvhWidth::Two)),
+        (AccelKind::Bvh, Some(BvhWidth::Eight)),
+    ];
+    let [course, standard] = [Profile::Course, Profile::Standard].map(|profile| {
+        structures.map(|(kind, width)| {
+            render_scene(&scene, |o| {
+                (o.width, o.height) = (64, 64);
+                o.shade = o.shade.with_profile(profile);
+                o.accel.kind = kind;
+                o.accel.bvh_width = width;
+            })
+            .to_rgb8()
+        })
+    });
+    for (k, image) in course.iter().enumerate() {
+        assert!(
+            *image == course[0],
+            "structure {k} differs from brute force"
+        );
+    }
+    assert!(course[0] != standard[0], "the profiles give the same image");
 }
 
 #[test]
