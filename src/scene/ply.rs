@@ -21,15 +21,20 @@ const MAX_BYTES: u64 = 4 << 30;
 pub fn read_ply(path: &Path) -> Result<Mesh, String> {
     let name = path.display().to_string();
     let raw = std::fs::read(path).map_err(|e| format!("{name}: cannot read: {e}"))?;
+    parse_ply_file(&raw, &name)
+}
+
+/// The bytes of a PLY file named `name` (in messages), gzipped or not.
+pub fn parse_ply_file(raw: &[u8], name: &str) -> Result<Mesh, String> {
     let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
         let mut out = Vec::new();
         flate2::read::MultiGzDecoder::new(&raw[..])
             .take(MAX_BYTES + 1)
             .read_to_end(&mut out)
             .map_err(|e| format!("{name}: cannot decompress: {e}"))?;
-        out
+        std::borrow::Cow::Owned(out)
     } else {
-        raw
+        std::borrow::Cow::Borrowed(raw)
     };
     if bytes.len() as u64 > MAX_BYTES {
         return Err(format!("{name}: larger than {} GiB", MAX_BYTES >> 30));
