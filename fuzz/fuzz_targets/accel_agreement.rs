@@ -10,6 +10,7 @@ use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
 use p3trace::accel::{BvhBuild, BvhWidth};
 use p3trace::ray::{Hit, Ray, RayPacket};
 use p3trace::render::sampler::SampleGrid;
+use p3trace::render::shade::Profile;
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::p3f::{parse_text, MAX_MAGNITUDE};
 use p3trace::scene::CameraSpec;
@@ -147,6 +148,8 @@ struct Input {
     active: u8,
     camera: (Point, Point, Point, u8),
     jittered: bool,
+    /// The course profile: its textbook sphere roots reach every structure's kernels.
+    course: bool,
 }
 
 /// Every structure and setting the renderer can run, but brute force.
@@ -268,6 +271,12 @@ fuzz_target!(|input: Input| {
     let mut options = RenderOptions::from_scene(&scene);
     (options.width, options.height) = (8, 6);
     options.threads = Some(1);
+    let profile = if input.course {
+        Profile::Course
+    } else {
+        Profile::Standard
+    };
+    options.shade = options.shade.with_profile(profile);
     options.shade.max_depth = 3;
     if input.jittered {
         // With samples to spread them over, every distribution effect is on too.
