@@ -163,15 +163,18 @@ mod tests {
     use super::*;
     use crate::render::sampler::SampleRng;
 
+    /// A white area light 5 above the origin facing down: 2 wide along x, 1 high along z.
+    const AREA: Light = Light::Area {
+        centre: Vec3::new(0., 5., 0.),
+        target: Vec3::ZERO,
+        width: 2.0,
+        height: 1.0,
+        colour: Vec3::ONE,
+    };
+
     #[test]
     fn area_light_grid_covers_the_rectangle_with_the_full_colour() {
-        let light = Light::Area {
-            centre: Vec3::new(0., 5., 0.),
-            target: Vec3::ZERO,
-            width: 2.0,
-            height: 1.0,
-            colour: Vec3::ONE,
-        };
+        let light = AREA;
         let samples = emitters(&[light], Vec3::Z, None, DEFAULT_LIGHT_GRID, false);
         assert_eq!(samples.len(), DEFAULT_LIGHT_GRID.cells() as usize);
         let points = samples.iter().map(|e| match e {
@@ -244,14 +247,7 @@ mod tests {
 
     #[test]
     fn rectangular_grids_run_columns_across_and_rows_up() {
-        // Width 2 along x, height 1 along z.
-        let light = Light::Area {
-            centre: Vec3::new(0., 5., 0.),
-            target: Vec3::ZERO,
-            width: 2.0,
-            height: 1.0,
-            colour: Vec3::ONE,
-        };
+        let light = AREA;
         let eight = SampleGrid::with_cells(8);
         let points: Vec<Vec3> = emitters(&[light], Vec3::Z, None, eight, false)
             .iter()
