@@ -28,7 +28,7 @@ pub fn read_ply(path: &Path) -> Result<Mesh, String> {
 pub fn parse_ply_file(raw: &[u8], name: &str) -> Result<Mesh, String> {
     let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
         let mut out = Vec::new();
-        flate2::read::MultiGzDecoder::new(&raw[..])
+        flate2::read::MultiGzDecoder::new(raw)
             .take(MAX_BYTES + 1)
             .read_to_end(&mut out)
             .map_err(|e| format!("{name}: cannot decompress: {e}"))?;
