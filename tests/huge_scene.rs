@@ -2,52 +2,16 @@
 //! within the memory the README states. A counting allocator measures the peak of the
 //! heap; this file holds one test so that nothing else allocates meanwhile.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+#[path = "common/counting.rs"]
+mod counting;
 
 use glam::Vec3;
 use p3trace::accel::{Accel, AccelOptions, Tracer};
 use p3trace::render::{render, RenderOptions};
 use p3trace::scene::{CameraSpec, Material, Scene};
 
-/// The system allocator, counting the bytes held now and at most.
-struct Counting;
-
-static HELD: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-fn grew(bytes: usize) {
-    let now = HELD.fetch_add(bytes, Ordering::Relaxed) + bytes;
-    PEAK.fetch_max(now, Ordering::Relaxed);
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) };
-        HELD.fetch_sub(layout.size(), Ordering::Relaxed);
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            // Counted as held at both sizes for the moment of the copy.
-            grew(new_size);
-            HELD.fetch_sub(layout.size(), Ordering::Relaxed);
-        }
-        p
-    }
-}
-
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
+static ALLOCATOR: counting::Counting = counting::Counting;
 
 /// The lattice: 250 x 200 x 200 spheres of radius 0.25, one unit apart.
 const SIDES: [u32; 3] = [250, 200, 200];
@@ -61,8 +25,7 @@ const MAX_BYTES_PER_SPHERE: f64 = 400.0;
 
 #[test]
 fn ten_million_spheres_render_within_the_stated_memory() {
-    let before = HELD.load(Ordering::Relaxed);
-    PEAK.store(before, Ordering::Relaxed);
+    let before = counting::start();
 
     let mut scene = Scene {
         name: "10M spheres".into(),
@@ -83,7 +46,7 @@ fn ten_million_spheres_render_within_the_stated_memory() {
         }
     }
     assert_eq!(spheres.radius.len(), SPHERES);
-    let stored = HELD.load(Ordering::Relaxed) - before;
+    let stored = counting::held_since(before);
 
     scene.camera = CameraSpec {
         from: Vec3::new(124.6, 99.6, 400.0),
@@ -96,7 +59,7 @@ fn ten_million_spheres_render_within_the_stated_memory() {
     };
     let options = RenderOptions::from_scene(&scene);
     let report = render(&scene, &options).unwrap();
-    let peak = PEAK.load(Ordering::Relaxed) - before;
+    let peak = counting::peak_since(before);
     let per_sphere = peak as f64 / SPHERES as f64;
     eprintln!(
         "10M spheres: stored in {:.0} MB ({:.1} bytes each); peak of the render {:.0} MB, \

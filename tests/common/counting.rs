@@ -1,0 +1,59 @@
+//! A global allocator that counts the heap held now and at its peak, for the tests that
+//! measure memory (`huge_scene.rs`, `huge_mesh.rs`). Each of those files holds one test,
+//! so that nothing else allocates meanwhile.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// The system allocator, counting the bytes held now and at most.
+pub struct Counting;
+
+static HELD: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+fn grew(bytes: usize) {
+    let now = HELD.fetch_add(bytes, Ordering::Relaxed) + bytes;
+    PEAK.fetch_max(now, Ordering::Relaxed);
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let p = unsafe { System.alloc(layout) };
+        if !p.is_null() {
+            grew(layout.size());
+        }
+        p
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) };
+        HELD.fetch_sub(layout.size(), Ordering::Relaxed);
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if !p.is_null() {
+            // Counted as held at both sizes for the moment of the copy.
+            grew(new_size);
+            HELD.fetch_sub(layout.size(), Ordering::Relaxed);
+        }
+        p
+    }
+}
+
+/// Starts a measurement: the bytes held now, from which [`peak_since`] counts.
+pub fn start() -> usize {
+    let before = HELD.load(Ordering::Relaxed);
+    PEAK.store(before, Ordering::Relaxed);
+    before
+}
+
+/// The most bytes held since [`start`] returned `before`, above it.
+pub fn peak_since(before: usize) -> usize {
+    PEAK.load(Ordering::Relaxed) - before
+}
+
+/// The bytes held now above `before`.
+pub fn held_since(before: usize) -> usize {
+    HELD.load(Ordering::Relaxed) - before
+}

@@ -1,0 +1,100 @@
+//! Ten million triangles: a height field stored as the reader stores a mesh, built into
+//! the default BVH and rendered at a small size within the memory the README states. A
+//! counting allocator measures the peak of the heap; this file holds one test so that
+//! nothing else allocates meanwhile.
+
+#[path = "common/counting.rs"]
+mod counting;
+
+use glam::Vec3;
+use p3trace::render::{render, RenderOptions};
+use p3trace::scene::{CameraSpec, Material, Scene};
+
+#[global_allocator]
+static ALLOCATOR: counting::Counting = counting::Counting;
+
+/// 2500 x 2000 cells of two triangles each, one unit apart.
+const CELLS: [u32; 2] = [2500, 2000];
+const TRIANGLES: usize = 10_000_000;
+
+/// The most heap a triangle may take at the peak of storing, building the default BVH and
+/// rendering (230 measured, BENCHMARKS.md: 74 for the triangle arrays as they grow).
+const MAX_BYTES_PER_TRIANGLE: f64 = 260.0;
+
+/// A gentle landscape, so that the SAH has shapes to split.
+fn height(x: u32, y: u32) -> f32 {
+    let (x, y) = (x as f32, y as f32);
+    2.0 * (x * 0.013).sin() * (y * 0.017).cos() + 0.5 * (x * 0.11 + y * 0.07).sin()
+}
+
+#[test]
+fn ten_million_triangles_render_within_the_stated_memory() {
+    let before = counting::start();
+
+    let mut scene = Scene {
+        name: "10M triangles".into(),
+        background: Vec3::new(0.2, 0.4, 0.6),
+        has_camera: true,
+        ..Scene::default()
+    };
+    scene.materials.push(Material::DEFAULT);
+    // Pushed one by one as the reader pushes a mesh's triangles, so the arrays grow as
+    // they would.
+    let point = |x: u32, y: u32| Vec3::new(x as f32, y as f32, height(x, y));
+    let triangles = &mut scene.geometry.triangles;
+    for x in 0..CELLS[0] {
+        for y in 0..CELLS[1] {
+            let [a, b, c, d] = [
+                point(x, y),
+                point(x + 1, y),
+                point(x + 1, y + 1),
+                point(x, y + 1),
+            ];
+            triangles.push([a, b, c], None, 0);
+            triangles.push([a, c, d], None, 0);
+        }
+    }
+    assert_eq!(triangles.material.len(), TRIANGLES);
+    let stored = counting::held_since(before);
+
+    scene.camera = CameraSpec {
+        from: Vec3::new(1250.0, -600.0, 900.0),
+        at: Vec3::new(1250.0, 1000.0, 0.0),
+        up: Vec3::Z,
+        angle: 50.0,
+        width: 64,
+        height: 48,
+        ..CameraSpec::default()
+    };
+    scene.lights.push(p3trace::scene::Light::Point {
+        position: Vec3::new(1250.0, 1000.0, 2000.0),
+        colour: Vec3::ONE,
+    });
+    let options = RenderOptions::from_scene(&scene);
+    let report = render(&scene, &options).unwrap();
+    let peak = counting::peak_since(before);
+    let per_triangle = peak as f64 / TRIANGLES as f64;
+    eprintln!(
+        "10M triangles: stored in {:.0} MB ({:.1} bytes each); peak of the render {:.0} MB, \
+         {per_triangle:.1} bytes per triangle; {} in {:.1} s",
+        stored as f64 / 1e6,
+        stored as f64 / TRIANGLES as f64,
+        peak as f64 / 1e6,
+        report.accel_name,
+        (report.build_time + report.elapsed).as_secs_f64()
+    );
+    assert!(
+        per_triangle <= MAX_BYTES_PER_TRIANGLE,
+        "{per_triangle:.1} bytes per triangle at the peak, above {MAX_BYTES_PER_TRIANGLE}"
+    );
+    // The sky fills the top row (the film's first); the landscape below it is lit.
+    let background = report.film.pixels[0];
+    assert_eq!(background, scene.background);
+    let lit = report
+        .film
+        .pixels
+        .iter()
+        .filter(|&&p| p != background && p != Vec3::ZERO)
+        .count();
+    assert!(lit > 0, "no pixel shows the landscape lit");
+}
