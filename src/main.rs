@@ -42,6 +42,8 @@ fn main() -> ExitCode {
     // First, before any code that may use them: a CPU without the instructions the
     // binary was compiled for would otherwise die of an illegal instruction.
     p3trace::machine::check_cpu();
+    // A closed pipe ends the program quietly, as it does other command-line tools: Rust
+    // ignores SIGPIPE, so every `println!` into a closed pipe would panic instead.
     #[cfg(unix)]
     // SAFETY: restoring a signal's default action, before any other thread exists.
     unsafe {
