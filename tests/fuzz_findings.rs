@@ -181,3 +181,43 @@ fn sliver_triangle_hits_only_inside_its_box() {
     let bvh = Tracer::new(g, Accel::build(g, &options).0);
     assert_eq!(bvh.closest(&ray, 0.0, f32::INFINITY), brute);
 }
+
+/// accel_agreement, crash-66dcec3ee590: a sphere of radius 9.4e-38 at the origin and a
+/// ray passing 2.5e-35 from it. Every square in the sphere test underflowed to zero, so
+/// brute force found `disc = 0 - 0` and hit the sphere, while the BVH's box test, which
+/// squares nothing, rightly missed its box. Fixed in `intersect::sphere` and its twins: a
+/// radius below `MIN_RADIUS` (2^-63, whose square is the smallest normal float) is never
+/// hit, and the reader warns of it as of a radius of 0.
+#[test]
+fn a_sphere_too_small_to_square_is_never_hit() {
+    use p3trace::accel::{Accel, AccelOptions, Tracer};
+    use p3trace::intersect::{sphere, MIN_RADIUS};
+    use p3trace::ray::Ray;
+    let text = "p 3 0 -1000000000 -1000000000 0 -500000000 -500000000 0 0 0\n\
+                s 0 0 0 0.000000000000000000000000000000000000093859476\n";
+    let scene = parse_text(text).unwrap();
+    assert!(
+        scene.warnings.iter().any(|w| w.message
+            == "'s': a sphere of radius 9.3859476e-38 is never hit: the smallest that is hit \
+                is 1.0842022e-19"),
+        "{:?}",
+        scene.warnings
+    );
+    let ray = Ray::new(
+        Vec3::new(1.1938972e-38, 0.0, 2.4512975e-35),
+        Vec3::new(-1.0, 0.0, -1.7166798e-9),
+    );
+    let g = &scene.geometry;
+    let brute = Tracer::new(g, Accel::None).closest(&ray, 0.0, 1e9);
+    assert_eq!(brute, None);
+    let bvh = Tracer::new(g, Accel::build(g, &AccelOptions::default()).0);
+    assert_eq!(bvh.closest(&ray, 0.0, 1e9), None);
+    // The limit is exactly where the square stays normal.
+    assert_eq!(MIN_RADIUS * MIN_RADIUS, f32::MIN_POSITIVE);
+    let towards = Ray::new(Vec3::new(1.0, 0.0, 0.0), Vec3::new(-1.0, 0.0, 0.0));
+    assert!(sphere(&towards, Vec3::ZERO, MIN_RADIUS, 0.0, 2.0).is_some());
+    assert_eq!(
+        sphere(&towards, Vec3::ZERO, MIN_RADIUS / 2.0, 0.0, 2.0),
+        None
+    );
+}

@@ -37,6 +37,7 @@ pub use moving_sphere::MovingSpheres;
 pub use plane::{plane, plane_packet, Planes};
 pub use sphere::{
     sphere, sphere_leaf, sphere_packet, sphere_textbook, SpherePack8, SphereRoots, Spheres,
+    MIN_RADIUS,
 };
 pub use triangle::{
     triangle, triangle_leaf, triangle_packet, TriangleHit, TriangleHit8, TrianglePack8, Triangles,

@@ -22,11 +22,17 @@ pub enum SphereRoots {
     Textbook,
 }
 
+/// The smallest radius a sphere is hit with, 2^-63 (about 1.08e-19): the square of a
+/// smaller one is not a normal float, and the tests' squares underflow to zero, so that
+/// a ray passing far off such a sphere would find `disc = 0 - 0` and hit it.
+pub const MIN_RADIUS: f32 = f32::from_bits(0x2000_0000);
+
 /// Ray-sphere test. The report's early exit comes first: an origin outside the sphere with
 /// the centre behind it is a miss before the discriminant is computed. The discriminant is
 /// taken as `r^2 - |perpendicular offset|^2` and the near root as `c / q`, which keeps
 /// precision for large spheres seen from close by (the random scene's ground has radius
-/// 1000). A sphere of radius zero or less is never hit.
+/// 1000). A sphere of radius below [`MIN_RADIUS`] (zero, negative or NaN included) is
+/// never hit.
 pub fn sphere(ray: &Ray, centre: Vec3, radius: f32, t_min: f32, t_max: f32) -> Option<f32> {
     let oc = centre - ray.origin;
     let b = oc.dot(ray.dir);
@@ -36,7 +42,7 @@ pub fn sphere(ray: &Ray, centre: Vec3, radius: f32, t_min: f32, t_max: f32) -> O
     }
     let perpendicular = oc - b * ray.dir;
     let disc = radius * radius - perpendicular.dot(perpendicular);
-    if !(disc >= 0.0 && radius > 0.0) {
+    if !(disc >= 0.0 && radius >= MIN_RADIUS) {
         return None;
     }
     let q = b + disc.sqrt().copysign(b);
@@ -65,7 +71,7 @@ pub fn sphere_textbook(
         return None;
     }
     let disc = b * b - c;
-    if !(disc >= 0.0 && radius > 0.0) {
+    if !(disc >= 0.0 && radius >= MIN_RADIUS) {
         return None;
     }
     let root = disc.sqrt();
@@ -177,7 +183,7 @@ fn sphere_lanes<const TEXTBOOK: bool>(
         let ordered = r0.le(r1);
         (disc, ordered.select(r0, r1), ordered.select(r1, r0))
     };
-    let real = (disc.ge(zero) & radius.gt(zero)).and_not(behind);
+    let real = (disc.ge(zero) & radius.ge(F32x8::splat(MIN_RADIUS))).and_not(behind);
     let (hit, t) = first_root_in8(near, far, t_min, t_max);
     (hit & real, t)
 }

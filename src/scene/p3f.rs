@@ -9,6 +9,7 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::{AccelKind, CameraSpec, Light, Material, Scene, Warning};
+use crate::intersect::MIN_RADIUS;
 use crate::limits::{check_image_size, MAX_RESOLUTION, MAX_SPP_SIDE};
 
 /// Largest magnitude of a number in a scene. The intersection routines multiply up to four
@@ -542,6 +543,11 @@ impl<'a> Parser<'a> {
         }
         if r == 0.0 {
             self.warn("a sphere of radius 0 is never hit");
+        } else if r < MIN_RADIUS {
+            self.warn(format!(
+                "a sphere of radius {r:e} is never hit: the smallest that is hit is \
+                 {MIN_RADIUS:e}"
+            ));
         }
         Ok(r)
     }
