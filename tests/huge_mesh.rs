@@ -7,7 +7,6 @@
 mod counting;
 
 use glam::Vec3;
-use p3trace::render::{render, RenderOptions};
 use p3trace::scene::{CameraSpec, Material, Scene};
 
 #[global_allocator]
@@ -55,7 +54,6 @@ fn ten_million_triangles_render_within_the_stated_memory() {
         }
     }
     assert_eq!(triangles.material.len(), TRIANGLES);
-    let stored = counting::held_since(before);
 
     scene.camera = CameraSpec {
         from: Vec3::new(1250.0, -600.0, 900.0),
@@ -70,22 +68,12 @@ fn ten_million_triangles_render_within_the_stated_memory() {
         position: Vec3::new(1250.0, 1000.0, 2000.0),
         colour: Vec3::ONE,
     });
-    let options = RenderOptions::from_scene(&scene);
-    let report = render(&scene, &options).unwrap();
-    let peak = counting::peak_since(before);
-    let per_triangle = peak as f64 / TRIANGLES as f64;
-    eprintln!(
-        "10M triangles: stored in {:.0} MB ({:.1} bytes each); peak of the render {:.0} MB, \
-         {per_triangle:.1} bytes per triangle; {} in {:.1} s",
-        stored as f64 / 1e6,
-        stored as f64 / TRIANGLES as f64,
-        peak as f64 / 1e6,
-        report.accel_name,
-        (report.build_time + report.elapsed).as_secs_f64()
-    );
-    assert!(
-        per_triangle <= MAX_BYTES_PER_TRIANGLE,
-        "{per_triangle:.1} bytes per triangle at the peak, above {MAX_BYTES_PER_TRIANGLE}"
+    let report = counting::render_within(
+        &scene,
+        before,
+        TRIANGLES,
+        "triangle",
+        MAX_BYTES_PER_TRIANGLE,
     );
     // The sky fills the top row (the film's first); the landscape below it is lit.
     let background = report.film.pixels[0];

@@ -7,7 +7,6 @@ mod counting;
 
 use glam::Vec3;
 use p3trace::accel::{Accel, AccelOptions, Tracer};
-use p3trace::render::{render, RenderOptions};
 use p3trace::scene::{CameraSpec, Material, Scene};
 
 #[global_allocator]
@@ -46,7 +45,6 @@ fn ten_million_spheres_render_within_the_stated_memory() {
         }
     }
     assert_eq!(spheres.radius.len(), SPHERES);
-    let stored = counting::held_since(before);
 
     scene.camera = CameraSpec {
         from: Vec3::new(124.6, 99.6, 400.0),
@@ -57,23 +55,7 @@ fn ten_million_spheres_render_within_the_stated_memory() {
         height: 48,
         ..CameraSpec::default()
     };
-    let options = RenderOptions::from_scene(&scene);
-    let report = render(&scene, &options).unwrap();
-    let peak = counting::peak_since(before);
-    let per_sphere = peak as f64 / SPHERES as f64;
-    eprintln!(
-        "10M spheres: stored in {:.0} MB ({:.1} bytes each); peak of the render {:.0} MB, \
-         {per_sphere:.1} bytes per sphere; {} in {:.1} s",
-        stored as f64 / 1e6,
-        stored as f64 / SPHERES as f64,
-        peak as f64 / 1e6,
-        report.accel_name,
-        (report.build_time + report.elapsed).as_secs_f64()
-    );
-    assert!(
-        per_sphere <= MAX_BYTES_PER_SPHERE,
-        "{per_sphere:.1} bytes per sphere at the peak, above the stated {MAX_BYTES_PER_SPHERE}"
-    );
+    let report = counting::render_within(&scene, before, SPHERES, "sphere", MAX_BYTES_PER_SPHERE);
 
     // The lattice fills the middle of the image; rays between its rows leave it.
     let background = report.film.pixels[0];

@@ -5,6 +5,9 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use p3trace::render::{render, RenderOptions, RenderReport};
+use p3trace::scene::Scene;
+
 /// The system allocator, counting the bytes held now and at most.
 pub struct Counting;
 
@@ -56,4 +59,35 @@ pub fn peak_since(before: usize) -> usize {
 /// The bytes held now above `before`.
 pub fn held_since(before: usize) -> usize {
     HELD.load(Ordering::Relaxed) - before
+}
+
+/// Renders `scene` as its file asks, then prints and checks the heap at the peak since
+/// [`start`] returned `before`, per primitive of the `count` of `kind`: at most
+/// `max_bytes` each.
+pub fn render_within(
+    scene: &Scene,
+    before: usize,
+    count: usize,
+    kind: &str,
+    max_bytes: f64,
+) -> RenderReport {
+    let stored = held_since(before);
+    let report = render(scene, &RenderOptions::from_scene(scene)).unwrap();
+    let peak = peak_since(before);
+    let each = peak as f64 / count as f64;
+    eprintln!(
+        "{}: stored in {:.0} MB ({:.1} bytes each); peak of the render {:.0} MB, \
+         {each:.1} bytes per {kind}; {} in {:.1} s",
+        scene.name,
+        stored as f64 / 1e6,
+        stored as f64 / count as f64,
+        peak as f64 / 1e6,
+        report.accel_name,
+        (report.build_time + report.elapsed).as_secs_f64()
+    );
+    assert!(
+        each <= max_bytes,
+        "{each:.1} bytes per {kind} at the peak, above the stated {max_bytes}"
+    );
+    report
 }
