@@ -221,3 +221,67 @@ fn a_sphere_too_small_to_square_is_never_hit() {
         None
     );
 }
+
+/// The scene of accel_agreement's crash-37bf537fbff3 (2026-11-30), rendered as the fuzz
+/// target renders it: 8 x 6 pixels, one thread, depth 3, two jittered samples with every
+/// effect on, with shading `profile`, by brute force (scalar) and by the grid (packets).
+fn crash_37bf_images(profile: p3trace::render::shade::Profile) -> [Vec<[u32; 3]>; 2] {
+    use p3trace::scene::CameraSpec;
+    let text = "s -1000000000 5.5 5.5 5.5\nbox 5.5 5.5 5.5 5.5 5.5 5.5\n\
+                s -1000000000 1000000000 1000000000 5.5\ns 5.5 5.5 -6 6\n\
+                l 6 6 6 5.5 5.5 5.5\ns 8 8 8 1000000000\n";
+    let mut scene = parse_text(text).unwrap();
+    scene.camera = CameraSpec {
+        from: Vec3::new(1e9, 1e9, 8.0),
+        at: Vec3::splat(8.0),
+        up: Vec3::new(8.0, -574872600.0, 8.0),
+        angle: 68.0,
+        aperture: 2.0,
+        ..CameraSpec::default()
+    };
+    let mut options = RenderOptions::from_scene(&scene);
+    (options.width, options.height) = (8, 6);
+    options.threads = Some(1);
+    options.shade = options.shade.with_profile(profile);
+    options.shade.max_depth = 3;
+    options.sampling = Sampling::Jittered(SampleGrid::with_cells(2));
+    options.shade.soft_light_size = Some(0.5);
+    options.shade.roughness = 0.3;
+    options.shutter = [0.0, 0.5];
+    [
+        (AccelKind::None, RenderMode::Scalar),
+        (AccelKind::Grid, RenderMode::Packet),
+    ]
+    .map(|(kind, mode)| {
+        options.accel.kind = kind;
+        options.mode = mode;
+        let film = render(&scene, &options).unwrap().film;
+        film.pixels
+            .iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect()
+    })
+}
+
+/// The standard profile gives one image of crash-37bf537fbff3's scene with brute force
+/// and the grid; the course profile's case is open (below).
+#[test]
+fn crash_37bf_agrees_with_the_standard_profile() {
+    let [brute, grid] = crash_37bf_images(p3trace::render::shade::Profile::Standard);
+    assert!(brute == grid);
+}
+
+/// Open, found by accel_agreement on 2026-11-30: a sphere of radius 1e9 seen from 1e9
+/// away, with the course profile, whose textbook quadratic (`b^2 - c` with both about
+/// 1e18) gives hit distances off by far more than the precise test's; brute force and
+/// the grid (packets) then give different images. The same scene with the precise test
+/// (standard profile) agrees, so the textbook test's error is the likely cause, meeting
+/// the grid's early exit at the first cell that holds a hit; not yet traced. Ignored
+/// until the structures allow for that error, or the course profile confines the
+/// textbook test to where the course's scenes need it.
+#[test]
+#[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
+fn crash_37bf_agrees_with_the_course_profile() {
+    let [brute, grid] = crash_37bf_images(p3trace::render::shade::Profile::Course);
+    assert!(brute == grid);
+}
