@@ -149,7 +149,15 @@ fn leaves(c: &mut Criterion) {
     let inf = f32::INFINITY;
 
     c.bench_function("leaf/sphere/simd", |b| {
-        b.iter(|| intersect::sphere_leaf(black_box(&ray), &sphere_pack, 0.0, inf))
+        b.iter(|| {
+            intersect::sphere_leaf(
+                black_box(&ray),
+                &sphere_pack,
+                SphereRoots::Precise,
+                0.0,
+                inf,
+            )
+        })
     });
     c.bench_function("leaf/sphere/scalar x8", |b| {
         b.iter(|| {

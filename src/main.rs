@@ -109,11 +109,11 @@ fn human_output(json: Option<&Path>) -> fn(&str) {
 
 /// `16 spp`, or `8 spp (4x2)` where the grid is not square.
 fn samples_label(sampling: Sampling) -> String {
-    match sampling {
-        Sampling::Jittered(grid) if grid.columns != grid.rows => {
-            format!("{} spp ({}x{})", grid.cells(), grid.columns, grid.rows)
-        }
-        _ => format!("{} spp", sampling.samples_per_pixel()),
+    let grid = sampling.grid();
+    if grid.columns == grid.rows {
+        format!("{} spp", grid.cells())
+    } else {
+        format!("{} spp ({}x{})", grid.cells(), grid.columns, grid.rows)
     }
 }
 

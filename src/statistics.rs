@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use p3trace::bench::Line;
 use p3trace::machine;
-use p3trace::render::{RenderOptions, RenderReport, Sampling};
+use p3trace::render::{RenderOptions, RenderReport};
 use p3trace::scene::Scene;
 use serde_json::{json, Value};
 
@@ -41,10 +41,7 @@ pub fn render(
     output: &Path,
 ) -> Value {
     let (program, cpu) = program_and_cpu();
-    let grid = match options.sampling {
-        Sampling::Centre => [1, 1],
-        Sampling::Jittered(grid) => [grid.columns, grid.rows],
-    };
+    let grid = options.sampling.grid();
     let rays = &report.rays;
     let seconds = report.elapsed.as_secs_f64();
     json!({
@@ -55,7 +52,7 @@ pub fn render(
         "output": output.display().to_string(),
         "resolution": [options.width, options.height],
         "samples_per_pixel": options.sampling.samples_per_pixel(),
-        "sample_grid": grid,
+        "sample_grid": [grid.columns, grid.rows],
         "mode": format!("{:?}", options.mode).to_lowercase(),
         "profile": format!("{:?}", options.shade.profile).to_lowercase(),
         "max_depth": options.shade.max_depth,

@@ -281,8 +281,8 @@ proptest! {
         spheres in prop::collection::vec((point(), radius()), 0..=8),
         roots in roots(),
     ) {
-        let pack = SpherePack8::new(&spheres).with_roots(roots);
-        let (hit, t) = intersect::sphere_leaf(&ray, &pack, t_min, t_max);
+        let pack = SpherePack8::new(&spheres);
+        let (hit, t) = intersect::sphere_leaf(&ray, &pack, roots, t_min, t_max);
         for i in 0..8 {
             let scalar = spheres
                 .get(i)
@@ -351,7 +351,7 @@ proptest! {
     #[test]
     fn padding_is_inert(ray in ray(), (t_min, t_max) in interval()) {
         let inv_dir = ray.dir.recip();
-        let spheres = intersect::sphere_leaf(&ray, &SpherePack8::new(&[]), t_min, t_max).0;
+        let spheres = intersect::sphere_leaf(&ray, &SpherePack8::new(&[]), SphereRoots::Precise, t_min, t_max).0;
         let triangles = intersect::triangle_leaf(&ray, &TrianglePack8::new(&[]), t_min, t_max);
         let boxes = intersect::aabb_leaf(&ray, inv_dir, &BoxPack8::new(&[]), t_min, t_max).0;
         prop_assert!(spheres.none() && triangles.hit.none() && boxes.none());

@@ -84,15 +84,13 @@ pub fn sphere_textbook(
 pub struct SpherePack8 {
     pub centre: Vec3x8,
     pub radius: F32x8,
-    pub roots: SphereRoots,
 }
 
 impl SpherePack8 {
     /// The radius of a padding slot (its centre is the origin): never hit.
     pub const PAD_RADIUS: f32 = 0.0;
 
-    /// Packs up to eight `(centre, radius)` pairs, padding the rest, for the precise test
-    /// (see [`SpherePack8::with_roots`]).
+    /// Packs up to eight `(centre, radius)` pairs, padding the rest.
     ///
     /// # Panics
     /// If given more than eight spheres.
@@ -106,13 +104,7 @@ impl SpherePack8 {
             radius: F32x8::from_array(std::array::from_fn(|i| {
                 slot(i).map_or(Self::PAD_RADIUS, |s| s.1)
             })),
-            roots: SphereRoots::Precise,
         }
-    }
-
-    /// This pack, tested with the quadratic `roots`.
-    pub fn with_roots(self, roots: SphereRoots) -> Self {
-        SpherePack8 { roots, ..self }
     }
 }
 
@@ -139,13 +131,20 @@ pub fn sphere_packet(
     (hit & Mask8::from_bitmask(active), t)
 }
 
-/// [`sphere`], or [`sphere_textbook`] as the pack says, for one ray against the eight
-/// spheres of a pack.
+/// [`sphere`], or [`sphere_textbook`] as `roots` says, for one ray against the eight
+/// spheres of a pack. The form belongs to all of a scene's spheres, so the tree keeps it
+/// once rather than each pack (which it would grow from 128 bytes to 160).
 #[inline]
-pub fn sphere_leaf(ray: &Ray, pack: &SpherePack8, t_min: f32, t_max: f32) -> (Mask8, F32x8) {
+pub fn sphere_leaf(
+    ray: &Ray,
+    pack: &SpherePack8,
+    roots: SphereRoots,
+    t_min: f32,
+    t_max: f32,
+) -> (Mask8, F32x8) {
     let (origin, dir) = (Vec3x8::splat(ray.origin), Vec3x8::splat(ray.dir));
     let (t_min, t_max) = (F32x8::splat(t_min), F32x8::splat(t_max));
-    match pack.roots {
+    match roots {
         SphereRoots::Precise => {
             sphere_lanes::<false>(origin, dir, pack.centre, pack.radius, t_min, t_max)
         }
@@ -203,7 +202,7 @@ impl Spheres {
         let spheres: Vec<(Vec3, f32)> = indices
             .map(|i| (self.centre.get(i), self.radius[i]))
             .collect();
-        SpherePack8::new(&spheres).with_roots(self.roots)
+        SpherePack8::new(&spheres)
     }
 }
 

@@ -62,11 +62,16 @@ impl Sampling {
         }
     }
 
-    pub fn samples_per_pixel(self) -> u32 {
+    /// The grid of the pixel's samples (one cell for the centre).
+    pub fn grid(self) -> SampleGrid {
         match self {
-            Sampling::Centre => 1,
-            Sampling::Jittered(grid) => grid.cells(),
+            Sampling::Centre => SampleGrid::square(1),
+            Sampling::Jittered(grid) => grid,
         }
+    }
+
+    pub fn samples_per_pixel(self) -> u32 {
+        self.grid().cells()
     }
 }
 
@@ -278,10 +283,8 @@ fn render_tile(
     tile: Tile,
 ) -> (Vec<Vec3>, RayCounts) {
     let mut rays = RayCounts::default();
-    let (grid, jittered) = match options.sampling {
-        Sampling::Centre => (SampleGrid::square(1), false),
-        Sampling::Jittered(grid) => (grid, true),
-    };
+    let grid = options.sampling.grid();
+    let jittered = options.sampling != Sampling::Centre;
     // Sample (p, q) of pixel (x, y): the same ray and random numbers in both modes.
     let [open, close] = options.shutter;
     let sample_ray = |x: u32, y: u32, p: u32, q: u32| {

@@ -38,6 +38,7 @@ impl Bvh8 {
             prims,
             triangles: Vec::new(),
             spheres: Vec::new(),
+            sphere_roots: geometry.spheres.roots,
             triangle_ids: Vec::new(),
             sphere_ids: Vec::new(),
             depth: 0,

@@ -16,7 +16,7 @@ mod packet;
 mod traverse;
 
 use super::bvh2::{Bvh2Stats, BvhBuild};
-use crate::intersect::{SpherePack8, TrianglePack8};
+use crate::intersect::{SpherePack8, SphereRoots, TrianglePack8};
 use crate::prim::PrimId;
 use node::{Node8, WIDTH};
 
@@ -27,6 +27,8 @@ pub struct Bvh8 {
     prims: Vec<PrimId>,
     triangles: Vec<TrianglePack8>,
     spheres: Vec<SpherePack8>,
+    /// How the sphere packs are tested: the scene's spheres' form of the quadratic.
+    sphere_roots: SphereRoots,
     /// The primitives of each pack, lane by lane (`triangles`, then `spheres`).
     triangle_ids: Vec<[PrimId; 8]>,
     sphere_ids: Vec<[PrimId; 8]>,

@@ -40,7 +40,13 @@ impl Bvh8 {
                 });
             }
             SPHERES => {
-                let (hit, t) = sphere_leaf(ray, &self.spheres[index], t_min, closest.bound());
+                let (hit, t) = sphere_leaf(
+                    ray,
+                    &self.spheres[index],
+                    self.sphere_roots,
+                    t_min,
+                    closest.bound(),
+                );
                 let (t, ids) = (t.to_array(), &self.sphere_ids[index]);
                 for_lanes(hit.bitmask(), |k| {
                     closest.offer(Hit {
@@ -75,7 +81,9 @@ impl Bvh8 {
             TRIANGLES => triangle_leaf(ray, &self.triangles[index], t_min, t_max)
                 .hit
                 .any(),
-            SPHERES => sphere_leaf(ray, &self.spheres[index], t_min, t_max).0.any(),
+            SPHERES => sphere_leaf(ray, &self.spheres[index], self.sphere_roots, t_min, t_max)
+                .0
+                .any(),
             _ => self.prims[index..index + count].iter().any(|&prim| {
                 geometry
                     .intersect(prim, ray, inv_dir, t_min, t_max)
