@@ -24,7 +24,7 @@ use p3trace::render::progress::Progress;
 use p3trace::render::sampler::SampleGrid;
 use p3trace::render::shade::Profile;
 use p3trace::render::{self, RenderMode, RenderOptions, Sampling};
-use p3trace::scene::{self, Light, Scene};
+use p3trace::scene::{self, Frame, Light, Scene};
 
 /// Why the command failed, and so which exit code it gives.
 enum Failure {
@@ -119,8 +119,8 @@ fn samples_label(sampling: Sampling) -> String {
 
 /// Reads and parses the scene at `path`: a file that cannot be read is an I/O failure
 /// (exit 1), a bad scene a usage one (exit 2, at its `file:line:col`).
-fn load_scene(path: &Path) -> Result<Scene, Failure> {
-    let scene = scene::parse_file(path).map_err(|e| match e {
+fn load_scene(path: &Path, frame: Frame) -> Result<Scene, Failure> {
+    let scene = scene::parse_file_in(path, frame).map_err(|e| match e {
         scene::FileError::Read(message) => Failure::Run(message),
         scene::FileError::Parse(e) => Failure::Usage(e.to_string()),
     })?;
@@ -146,12 +146,16 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     });
     // Refuse a bad output name before spending time on the render.
     OutputFormat::from_path(&output).map_err(Failure::Usage)?;
+    let profile = match args.profile {
+        ProfileChoice::Standard => Profile::Standard,
+        ProfileChoice::Course => Profile::Course,
+    };
     let mut scene = if args.scene == Path::new("random") {
         let text = random::random_scene(args.seed, None);
-        scene::p3f::parse_str(&text, "random", Path::new(""))
+        scene::parse_str_in(&text, "random", Path::new(""), profile.frame())
             .map_err(|e| Failure::Run(e.to_string()))?
     } else {
-        load_scene(&args.scene)?
+        load_scene(&args.scene, profile.frame())?
     };
     if let Some(aperture) = args.aperture {
         scene.camera.aperture = aperture;
@@ -171,10 +175,7 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     if let Some(n) = args.spp {
         options.sampling = Sampling::from_samples_per_pixel(n).map_err(Failure::Usage)?;
     }
-    options.shade = options.shade.with_profile(match args.profile {
-        ProfileChoice::Standard => Profile::Standard,
-        ProfileChoice::Course => Profile::Course,
-    });
+    options.shade = options.shade.with_profile(profile);
     if let Some(depth) = args.max_depth {
         options.shade.max_depth = depth;
     }
@@ -265,7 +266,7 @@ fn accel_options(scene: &Scene, args: &AccelArgs) -> AccelOptions {
 }
 
 fn run_info(path: &Path, accel_args: &AccelArgs) -> Result<ExitCode, Failure> {
-    let scene = load_scene(path)?;
+    let scene = load_scene(path, Frame::File)?;
     let g = &scene.geometry;
     println!("scene: {}", scene.name);
     let total: usize = PrimKind::ALL.iter().map(|&k| g.count(k)).sum();
@@ -353,7 +354,8 @@ fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
 
 fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     use p3trace::bench;
-    let scene = load_scene(&args.scene)?;
+    // The protocol's rays are made in the file's coordinates, as the Embree harness's.
+    let scene = load_scene(&args.scene, Frame::File)?;
     let options = accel_options(&scene, &args.accel);
     let (accel, build_time) = Accel::build(&scene.geometry, &options);
     let (name, stats) = (accel.name(), accel.stats());

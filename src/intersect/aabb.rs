@@ -8,7 +8,7 @@
 use glam::Vec3;
 
 use super::{first_root_in, first_root_in8};
-use super::{packet_hits, packet_interval, Aabb, Shapes, TriangleHit, Vec3s};
+use super::{packet_hits, packet_interval, Aabb, Shapes, SurfacePoint, TriangleHit, Vec3s};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -231,6 +231,20 @@ impl Shapes for Boxes {
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {
         aabb_normal(self.min.get(i), self.max.get(i), p)
+    }
+
+    /// `p` with the coordinate of the face hit set to the face's: exact, and the slab
+    /// test's `(face - origin)` has the exact sign, so the one float
+    /// [`SurfacePoint::spawn`] adds is enough.
+    fn surface_point(&self, i: usize, ray: &Ray, t: f32, _u: f32, _v: f32) -> SurfacePoint {
+        let (min, max, p) = (self.min.get(i), self.max.get(i), ray.at(t));
+        let normal = aabb_normal(min, max, p);
+        let face = Vec3::select(normal.cmpgt(Vec3::ZERO), max, min);
+        SurfacePoint {
+            point: Vec3::select(normal.cmpne(Vec3::ZERO), face, p),
+            error: Vec3::ZERO,
+            normal,
+        }
     }
 }
 

@@ -4,7 +4,9 @@
 
 use glam::Vec3;
 
-use super::{max_num, packet_hits, packet_interval, Aabb, Shapes, TriangleHit, Vec3s};
+use super::{
+    gamma, max_num, packet_hits, packet_interval, Aabb, Shapes, SurfacePoint, TriangleHit, Vec3s,
+};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -211,6 +213,32 @@ impl Shapes for Cones {
             self.r_apex[i],
             p,
         )
+    }
+
+    /// The hit moved across the axis to the radius at its height (kept on the axis, at a
+    /// pointed apex), its offset from the base taken as `(origin - base) + t dir` as the
+    /// sphere's is. The test's quadratic is off by `gamma` of the squares of the radius
+    /// and the distance from the axis, so the bound holds the radius beside the point's
+    /// terms.
+    fn surface_point(&self, i: usize, ray: &Ray, t: f32, _u: f32, _v: f32) -> SurfacePoint {
+        let (base, axis) = (self.base.get(i), self.axis.get(i));
+        let slope = (self.r_apex[i] - self.r_base[i]) / self.height[i];
+        let offset = (ray.origin - base) + t * ray.dir;
+        let along = offset.dot(axis) * axis;
+        let across = offset - along;
+        let radius = self.r_base[i] + slope * offset.dot(axis);
+        let distance = across.length();
+        let radial = if distance > 0.0 && distance.is_finite() {
+            across * (radius / distance)
+        } else {
+            across
+        };
+        let point = base + along + radial;
+        SurfacePoint {
+            point,
+            error: gamma(8) * (base.abs() + along.abs() + radial.abs() + Vec3::splat(radius.abs())),
+            normal: self.normal(i, point, 0.0, 0.0, ray.time),
+        }
     }
 }
 

@@ -103,6 +103,10 @@ pub trait Shapes {
     /// The outward unit normal at the hit point `p` (barycentrics `u`, `v` for
     /// triangles; `time` for moving primitives).
     fn normal(&self, i: usize, p: Vec3, u: f32, v: f32, time: f32) -> Vec3;
+
+    /// The hit at `t` along `ray` (barycentrics `u`, `v` for triangles; the ray's time
+    /// for moving primitives) recomputed on the surface, with its error bound and normal.
+    fn surface_point(&self, i: usize, ray: &Ray, t: f32, u: f32, v: f32) -> SurfacePoint;
 }
 
 /// Three parallel arrays of coordinates.
@@ -150,10 +154,54 @@ fn packet_interval(t_min: f32, t_max: &[f32; 8]) -> (F32x8, F32x8) {
     (F32x8::splat(t_min), F32x8::from_array(*t_max))
 }
 
-/// The relative error bound of three rounded operations, `3 u / (1 - 3 u)` with `u` the
-/// unit roundoff (PBRT's `gamma(3)`): a slab distance `(bound - origin) * inv_dir` is off
-/// by at most this much of itself.
-pub const GAMMA_3: f32 = 3.0 * (f32::EPSILON / 2.0) / (1.0 - 3.0 * (f32::EPSILON / 2.0));
+/// The relative error bound of `n` rounded operations, `n u / (1 - n u)` with `u` the unit
+/// roundoff (pbrt's `gamma(n)`).
+pub const fn gamma(n: u32) -> f32 {
+    let nu = n as f32 * (f32::EPSILON / 2.0);
+    nu / (1.0 - nu)
+}
+
+/// [`gamma`] of three: a slab distance `(bound - origin) * inv_dir` is off by at most this
+/// much of itself.
+pub const GAMMA_3: f32 = gamma(3);
+
+/// A hit recomputed on the surface it hit ([`Shapes::surface_point`]): the point, a bound
+/// of its remaining rounding error on each axis, and the outward unit normal there. Rays
+/// spawned at a hit start from it ([`SurfacePoint::spawn`]).
+///
+/// `ray.at(t)` is off the surface by the error of `t`, which cancellation can make
+/// thousands of ulps (a small sphere seen from afar, a grazing hit), and a normal taken
+/// from it as `p - centre` keeps only the digits that `p`'s magnitude leaves (a scene far
+/// from the origin keeps few). Recomputed from the surface's own description, relative to
+/// it (a sphere's centre and radius, a triangle's barycentrics), the point is off by a
+/// few ulps of the coordinates involved, which is what `error` bounds; so the offset that
+/// clears it follows the scene's scale and position.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    pub point: Vec3,
+    pub error: Vec3,
+    pub normal: Vec3,
+}
+
+impl SurfacePoint {
+    /// The origin of a ray leaving on the side of the unit vector `side` (the normal facing
+    /// where the ray goes): `point` moved along `side` by the error bound's extent along it,
+    /// then each coordinate one float further that way, so that an error bound of zero
+    /// still leaves the surface (pbrt-v4's `OffsetRayOrigin`).
+    pub fn spawn(&self, side: Vec3) -> Vec3 {
+        let moved = self.point + self.error.dot(side.abs()) * side;
+        let away = |k: usize| {
+            if side[k] > 0.0 {
+                moved[k].next_up()
+            } else if side[k] < 0.0 {
+                moved[k].next_down()
+            } else {
+                moved[k]
+            }
+        };
+        Vec3::new(away(0), away(1), away(2))
+    }
+}
 
 /// The first of two roots `near <= far` that lies in `(t_min, t_max)`: the entry of a
 /// convex shape, or its exit when the origin is inside.

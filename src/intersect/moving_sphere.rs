@@ -3,8 +3,8 @@
 
 use glam::Vec3;
 
-use super::sphere::{sphere, sphere_bounds};
-use super::{Aabb, Shapes, TriangleHit, Vec3s};
+use super::sphere::{sphere, sphere_bounds, sphere_surface_point};
+use super::{Aabb, Shapes, SurfacePoint, TriangleHit, Vec3s};
 use crate::ray::Ray;
 
 /// Spheres whose centre moves linearly from `centre0` at `time0` to `centre1` at `time1`.
@@ -57,5 +57,10 @@ impl Shapes for MovingSpheres {
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, time: f32) -> Vec3 {
         ((p - self.centre_at(i, time)) / self.radius[i]).normalize_or_zero()
+    }
+
+    /// The sphere's, about the centre the test used at the ray's `time`.
+    fn surface_point(&self, i: usize, ray: &Ray, t: f32, _u: f32, _v: f32) -> SurfacePoint {
+        sphere_surface_point(self.centre_at(i, ray.time), self.radius[i], ray, t)
     }
 }

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use super::{packet_hits, packet_interval, Aabb, Shapes, TriangleHit, Vec3s};
+use super::{gamma, packet_hits, packet_interval, Aabb, Shapes, SurfacePoint, TriangleHit, Vec3s};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -89,6 +89,21 @@ impl Shapes for Planes {
     /// The geometric normal of P3F.md section 2: planes have no inside.
     fn normal(&self, i: usize, _p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {
         self.normal.get(i)
+    }
+
+    /// `p` moved along the normal by its distance from the plane. The test decides which
+    /// side an origin is on by `offset - normal . origin`, off by `gamma(4)` of
+    /// `|normal| . |origin| + |offset|`, and the projection rounds as much again.
+    fn surface_point(&self, i: usize, ray: &Ray, t: f32, _u: f32, _v: f32) -> SurfacePoint {
+        let (normal, offset) = (self.normal.get(i), self.offset[i]);
+        let p = ray.at(t);
+        let point = p - (normal.dot(p) - offset) * normal;
+        let size = normal.abs().dot(point.abs()) + offset.abs();
+        SurfacePoint {
+            point,
+            error: gamma(2) * point.abs() + gamma(5) * size * normal.abs(),
+            normal,
+        }
     }
 }
 

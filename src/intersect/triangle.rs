@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::{packet_interval, Aabb, Shapes, Vec3s};
+use super::{gamma, packet_interval, Aabb, Shapes, SurfacePoint, Vec3s};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -285,6 +285,30 @@ impl Shapes for Triangles {
                     .try_normalize()
                     .unwrap_or_else(|| self.geometric_normal(i))
             }
+        }
+    }
+
+    /// `p0 + u e1 + v e2`, a point of the plane the test sees whatever `u` and `v` are. Its
+    /// sum is off by `gamma(7)` of its terms, as pbrt-v4 bounds its triangles' points. A
+    /// ray leaving it meets the plane again where Möller-Trumbore's triple product
+    /// `e2 . ((o - p0) x e1)` has the wrong sign; that product is off by `gamma(5)` of
+    /// `|o - p0| |e1| |e2|`, which is `|o - p0| / sin(angle between e1 and e2)` along the
+    /// normal, so a sliver's bound grows with its skew.
+    fn surface_point(&self, i: usize, ray: &Ray, _t: f32, u: f32, v: f32) -> SurfacePoint {
+        let (p0, e1, e2) = (self.p0.get(i), self.e1.get(i), self.e2.get(i));
+        let (along1, along2) = (u * e1, v * e2);
+        let point = p0 + along1 + along2;
+        let area = e1.cross(e2).length();
+        let skew = if area > 0.0 {
+            e1.length() * e2.length() / area
+        } else {
+            1.0
+        };
+        let product = gamma(5) * skew * (along1 + along2).length();
+        SurfacePoint {
+            point,
+            error: gamma(7) * (p0.abs() + along1.abs() + along2.abs()) + Vec3::splat(product),
+            normal: self.normal(i, point, u, v, ray.time),
         }
     }
 }

@@ -6,7 +6,8 @@
 use glam::Vec3;
 
 use crate::intersect::{
-    Aabb, Boxes, Cones, MovingSpheres, Planes, Shapes, SphereRoots, Spheres, TriangleHit, Triangles,
+    Aabb, Boxes, Cones, MovingSpheres, Planes, Shapes, SphereRoots, Spheres, SurfacePoint,
+    TriangleHit, Triangles,
 };
 use crate::prim::{prim_kinds, PrimId, PrimKind};
 use crate::ray::{Ray, RayPacket};
@@ -80,6 +81,23 @@ macro_rules! define_geometry {
             pub fn normal(&self, prim: PrimId, p: Vec3, u: f32, v: f32, time: f32) -> Vec3 {
                 match prim.kind() {
                     $(PrimKind::$kind => self.$field.normal(prim.index(), p, u, v, time),)*
+                }
+            }
+
+            /// The hit of `prim` at `t` along `ray` (barycentrics `u`, `v`) recomputed on its
+            /// surface, with its error bound and normal: where spawned rays start from
+            /// ([`SurfacePoint::spawn`]).
+            pub fn surface_point(
+                &self,
+                prim: PrimId,
+                ray: &Ray,
+                t: f32,
+                u: f32,
+                v: f32,
+            ) -> SurfacePoint {
+                let i = prim.index();
+                match prim.kind() {
+                    $(PrimKind::$kind => self.$field.surface_point(i, ray, t, u, v),)*
                 }
             }
         }

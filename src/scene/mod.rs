@@ -7,10 +7,10 @@ pub mod ply;
 
 use std::path::PathBuf;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 pub use geometry::Geometry;
-pub use p3f::{parse_file, parse_str, FileError, ParseError};
+pub use p3f::{parse_file, parse_file_in, parse_str, parse_str_in, FileError, ParseError};
 
 /// `f Rd Gd Bd Kd Rs Gs Bs Ks Shine T ior` (P3F.md section 5).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -125,4 +125,20 @@ pub struct Scene {
     /// Whether a `v` block was read.
     pub has_camera: bool,
     pub warnings: Vec<Warning>,
+    /// Where the stored coordinates start, in the file's ([`Frame`]): zero, or the
+    /// camera's `from`.
+    pub origin: DVec3,
+}
+
+/// The frame the reader stores positions in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Frame {
+    /// The file's own coordinates, as written (the course's renderer's, the protocol's).
+    #[default]
+    File,
+    /// Relative to the camera's `from`, subtracted in double precision: a scene far from
+    /// the file's origin keeps the precision it has at the origin, so moving a whole
+    /// scene (camera and lights too) leaves its image as it is (P3F.md 4). Directions and
+    /// lengths are the file's; [`Scene::origin`] holds the `from`.
+    Camera,
 }

@@ -6,9 +6,9 @@
 use std::fmt;
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
-use super::{AccelKind, CameraSpec, Light, Material, Scene, Warning};
+use super::{AccelKind, CameraSpec, Frame, Light, Material, Scene, Warning};
 use crate::intersect::MIN_RADIUS;
 use crate::limits::{check_image_size, MAX_RESOLUTION, MAX_SPP_SIDE};
 
@@ -62,8 +62,14 @@ impl fmt::Display for FileError {
 
 impl std::error::Error for FileError {}
 
-/// Reads and parses a P3F file. `env` folders are resolved against the file's folder.
+/// Reads and parses a P3F file in its own coordinates. `env` folders are resolved against
+/// the file's folder.
 pub fn parse_file(path: &Path) -> std::result::Result<Scene, FileError> {
+    parse_file_in(path, Frame::File)
+}
+
+/// [`parse_file`], storing positions in `frame`.
+pub fn parse_file_in(path: &Path, frame: Frame) -> std::result::Result<Scene, FileError> {
     let name = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|e| {
         // "No such file or directory (os error 2)": the reason, without its number.
@@ -71,13 +77,20 @@ pub fn parse_file(path: &Path) -> std::result::Result<Scene, FileError> {
         let reason = reason.split(" (os error").next().unwrap_or_default();
         FileError::Read(format!("cannot read '{name}': {reason}"))
     })?;
-    parse_bytes(&bytes, &name, path.parent().unwrap_or(Path::new(""))).map_err(FileError::Parse)
+    let text = utf8(&bytes, &name).map_err(FileError::Parse)?;
+    parse_str_in(text, &name, path.parent().unwrap_or(Path::new("")), frame)
+        .map_err(FileError::Parse)
 }
 
 /// Parses the bytes of a P3F file, which must be UTF-8 text; `name` and `base_dir` as
 /// for [`parse_str`].
 pub fn parse_bytes(bytes: &[u8], name: &str, base_dir: &Path) -> Result<Scene> {
-    let text = std::str::from_utf8(bytes).map_err(|e| {
+    parse_str(utf8(bytes, name)?, name, base_dir)
+}
+
+/// The bytes of the file `name` as text, or where they stop being UTF-8.
+fn utf8<'a>(bytes: &'a [u8], name: &str) -> Result<&'a str> {
+    std::str::from_utf8(bytes).map_err(|e| {
         let (line, column) = position_of(bytes, e.valid_up_to());
         ParseError {
             file: name.to_string(),
@@ -86,12 +99,17 @@ pub fn parse_bytes(bytes: &[u8], name: &str, base_dir: &Path) -> Result<Scene> {
             directive: None,
             message: "the file is not UTF-8 text".into(),
         }
-    })?;
-    parse_str(text, name, base_dir)
+    })
 }
 
-/// Parses P3F text; `name` is used in messages and `base_dir` to resolve `env`.
+/// Parses P3F text in its own coordinates; `name` is used in messages and `base_dir` to
+/// resolve `env`.
 pub fn parse_str(text: &str, name: &str, base_dir: &Path) -> Result<Scene> {
+    parse_str_in(text, name, base_dir, Frame::File)
+}
+
+/// [`parse_str`], storing positions in `frame`.
+pub fn parse_str_in(text: &str, name: &str, base_dir: &Path, frame: Frame) -> Result<Scene> {
     let mut parser = Parser {
         lexer: Lexer::new(text),
         file: name,
@@ -103,8 +121,36 @@ pub fn parse_str(text: &str, name: &str, base_dir: &Path) -> Result<Scene> {
         material: None,
         base_dir,
     };
+    if frame == Frame::Camera {
+        parser.scene.origin = camera_position(text);
+    }
     parser.parse()?;
     Ok(parser.scene)
+}
+
+/// The `from` of the text's first camera block in double precision, or zero when there
+/// is none (or it is not three numbers the reader accepts): the origin of the stored
+/// coordinates in [`Frame::Camera`]. Any origin describes the same scene; this one keeps
+/// the most precision where the camera looks from.
+fn camera_position(text: &str) -> DVec3 {
+    let mut lexer = Lexer::new(text);
+    let found = std::iter::from_fn(|| lexer.next())
+        .skip_while(|t| t.text != "v")
+        .skip_while(|t| t.text != "from")
+        .skip(1)
+        .take(3)
+        .map(|t| {
+            t.text
+                .parse::<f32>()
+                .ok()
+                .filter(|x| x.abs() <= MAX_MAGNITUDE)
+                .and_then(|_| t.text.parse::<f64>().ok())
+        })
+        .collect::<Option<Vec<f64>>>();
+    match found.as_deref() {
+        Some(&[x, y, z]) => DVec3::new(x, y, z),
+        _ => DVec3::ZERO,
+    }
 }
 
 fn position_of(bytes: &[u8], offset: usize) -> (u32, u32) {
@@ -261,9 +307,14 @@ impl<'a> Parser<'a> {
     }
 
     fn number(&mut self, what: &str) -> Result<f32> {
+        Ok(self.number_token(what)?.0)
+    }
+
+    /// A number and its token.
+    fn number_token(&mut self, what: &str) -> Result<(f32, Token<'a>)> {
         let token = self.token(what)?;
         match token.text.parse::<f32>() {
-            Ok(x) if x.abs() <= MAX_MAGNITUDE => Ok(x),
+            Ok(x) if x.abs() <= MAX_MAGNITUDE => Ok((x, token)),
             Ok(x) if x.is_finite() => Err(self.error_token(
                 token,
                 format!(
@@ -288,6 +339,19 @@ impl<'a> Parser<'a> {
             self.number(what)?,
             self.number(what)?,
         ))
+    }
+
+    /// A position: three numbers as [`Parser::vec3`] reads them, stored relative to
+    /// [`Scene::origin`], the difference taken in double precision.
+    fn point(&mut self, what: &str) -> Result<Vec3> {
+        let mut point = Vec3::ZERO;
+        for axis in 0..3 {
+            let (_, token) = self.number_token(what)?;
+            // The text parses as an f32 within MAX_MAGNITUDE, so as an f64 too.
+            let x = token.text.parse::<f64>().unwrap_or_default();
+            point[axis] = (x - self.scene.origin[axis]) as f32;
+        }
+        Ok(point)
     }
 
     fn integer(&mut self, what: &str) -> Result<(i64, Token<'a>)> {
@@ -383,7 +447,7 @@ impl<'a> Parser<'a> {
             }
             "v" => self.camera()?,
             "l" => {
-                let position = self.vec3("a light position")?;
+                let position = self.point("a light position")?;
                 let colour = if self.next_is_number() {
                     self.vec3("a light colour component")?
                 } else {
@@ -392,8 +456,8 @@ impl<'a> Parser<'a> {
                 self.scene.lights.push(Light::Point { position, colour });
             }
             "al" => {
-                let centre = self.vec3("the area light's centre")?;
-                let target = self.vec3("the point the area light faces")?;
+                let centre = self.point("the area light's centre")?;
+                let target = self.point("the point the area light faces")?;
                 let width = self.number("the area light's width")?;
                 let height = self.number("the area light's height")?;
                 let colour = if self.next_is_number() {
@@ -435,7 +499,7 @@ impl<'a> Parser<'a> {
                 self.material = Some(self.scene.materials.len() as u32 - 1);
             }
             "s" => {
-                let centre = self.vec3("the sphere's centre")?;
+                let centre = self.point("the sphere's centre")?;
                 let radius = self.radius()?;
                 let material = self.object_material();
                 let s = &mut self.scene.geometry.spheres;
@@ -444,8 +508,8 @@ impl<'a> Parser<'a> {
                 s.material.push(material);
             }
             "ms" | "sm" => {
-                let c0 = self.vec3("the centre at time t0")?;
-                let c1 = self.vec3("the centre at time t1")?;
+                let c0 = self.point("the centre at time t0")?;
+                let c1 = self.point("the centre at time t1")?;
                 let radius = self.radius()?;
                 let t0 = self.number("t0")?;
                 let t1 = self.number("t1")?;
@@ -464,9 +528,9 @@ impl<'a> Parser<'a> {
                 s.material.push(material);
             }
             "pl" => {
-                let p1 = self.vec3("a point of the plane")?;
-                let p2 = self.vec3("a point of the plane")?;
-                let p3 = self.vec3("a point of the plane")?;
+                let p1 = self.point("a point of the plane")?;
+                let p2 = self.point("a point of the plane")?;
+                let p3 = self.point("a point of the plane")?;
                 let normal = (p3 - p2).cross(p1 - p2);
                 if !(normal.length_squared() > 0.0) {
                     return Err(self.error_directive("the plane's three points are collinear"));
@@ -482,7 +546,7 @@ impl<'a> Parser<'a> {
                 let n = self.count("the number of vertices", 3, 3)?;
                 let mut points = Vec::with_capacity(n);
                 for _ in 0..n {
-                    points.push(self.vec3("a vertex coordinate")?);
+                    points.push(self.point("a vertex coordinate")?);
                 }
                 let material = self.object_material();
                 self.push_fan(&points, None, material);
@@ -491,7 +555,7 @@ impl<'a> Parser<'a> {
                 let n = self.count("the number of vertices", 3, 6)?;
                 let (mut points, mut normals) = (Vec::with_capacity(n), Vec::with_capacity(n));
                 for _ in 0..n {
-                    points.push(self.vec3("a vertex coordinate")?);
+                    points.push(self.point("a vertex coordinate")?);
                     normals.push(self.vec3("a vertex normal component")?);
                 }
                 let material = self.object_material();
@@ -499,8 +563,8 @@ impl<'a> Parser<'a> {
             }
             "mesh" => self.mesh()?,
             "box" => {
-                let a = self.vec3("the box's min corner")?;
-                let b = self.vec3("the box's max corner")?;
+                let a = self.point("the box's min corner")?;
+                let b = self.point("the box's max corner")?;
                 let material = self.object_material();
                 let boxes = &mut self.scene.geometry.boxes;
                 boxes.min.push(a.min(b));
@@ -508,9 +572,9 @@ impl<'a> Parser<'a> {
                 boxes.material.push(material);
             }
             "c" => {
-                let base = self.vec3("the base centre")?;
+                let base = self.point("the base centre")?;
                 let r_base = self.number("the base radius")?;
-                let apex = self.vec3("the apex centre")?;
+                let apex = self.point("the apex centre")?;
                 let r_apex = self.number("the apex radius")?;
                 let height = (apex - base).length();
                 if !(height > 0.0) {
@@ -571,7 +635,7 @@ impl<'a> Parser<'a> {
         }
         let mut vertices = Vec::with_capacity(nv);
         for _ in 0..nv {
-            vertices.push(self.vec3("a vertex coordinate")?);
+            vertices.push(self.point("a vertex coordinate")?);
         }
         let material = self.object_material();
         for _ in 0..nt {
@@ -604,8 +668,8 @@ impl<'a> Parser<'a> {
         {
             self.lexer.next();
             match key.text {
-                "from" => cam.from = self.vec3("the camera position")?,
-                "at" => cam.at = self.vec3("the point looked at")?,
+                "from" => cam.from = self.point("the camera position")?,
+                "at" => cam.at = self.point("the point looked at")?,
                 "up" => cam.up = self.vec3("the up vector")?,
                 "angle" => cam.angle = self.number("the field of view")?,
                 "hither" => cam.hither = self.number("hither")?,
