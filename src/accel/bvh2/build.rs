@@ -2,8 +2,6 @@
 //! SAH. Both append nodes depth first to one array and reorder the primitives so that
 //! each leaf's are contiguous.
 
-use glam::Vec3;
-
 use super::{BvhBuild, Node, TRAVERSAL_COST};
 use crate::accel::bounds::prim_bounds;
 use crate::intersect::Aabb;
@@ -22,13 +20,22 @@ const FREE_DEPTH: usize = 64;
 /// Subtrees over more primitives than this are built on two threads.
 const PARALLEL_BUILD: usize = 4096;
 
-/// A primitive during the build.
+/// A primitive during the build: 28 bytes, for the items and the nodes are the build's
+/// largest arrays. The centroid is the box's centre, recomputed where it is needed.
 #[derive(Clone, Copy)]
 struct Item {
     bounds: Aabb,
-    centroid: Vec3,
     prim: PrimId,
 }
+
+impl Item {
+    /// The centroid's coordinate on `axis` (as `Aabb::centre` computes it).
+    fn centroid(&self, axis: usize) -> f32 {
+        0.5 * (self.bounds.min[axis] + self.bounds.max[axis])
+    }
+}
+
+const _: () = assert!(std::mem::size_of::<Item>() == 28);
 
 /// The nodes, depth first, and the primitives in leaf order, over every bounded
 /// primitive of `geometry` whose box (moving spheres over `shutter`) is not empty.
@@ -42,11 +49,7 @@ pub(super) fn build(
         for prim in geometry.ids(kind) {
             let bounds = prim_bounds(geometry, prim, shutter);
             if !bounds.is_empty() {
-                items.push(Item {
-                    bounds,
-                    centroid: bounds.centre(),
-                    prim,
-                });
+                items.push(Item { bounds, prim });
             }
         }
     }
@@ -114,7 +117,9 @@ fn grow(nodes: &mut Vec<Node>, items: &mut [Item], offset: usize, depth: usize, 
 }
 
 fn centroid_bounds(items: &[Item]) -> Aabb {
-    items.iter().fold(Aabb::EMPTY, |b, it| b.grow(it.centroid))
+    items
+        .iter()
+        .fold(Aabb::EMPTY, |b, it| b.grow(it.bounds.centre()))
 }
 
 /// Splits at the median centroid along the centroids' longest axis, or makes a leaf
@@ -125,7 +130,7 @@ fn median_split(items: &mut [Item], leaf_size: usize) -> Option<usize> {
     }
     let axis = centroid_bounds(items).longest_axis();
     let k = items.len() / 2;
-    items.select_nth_unstable_by(k, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+    items.select_nth_unstable_by(k, |a, b| a.centroid(axis).total_cmp(&b.centroid(axis)));
     Some(k)
 }
 
@@ -137,15 +142,15 @@ fn midpoint_split(items: &mut [Item], bounds: &Aabb) -> Option<usize> {
         return None;
     }
     let axis = bounds.longest_axis();
-    items.sort_unstable_by(|a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+    items.sort_unstable_by(|a, b| a.centroid(axis).total_cmp(&b.centroid(axis)));
     let separates = |k: usize| k > 0 && k < n;
     let mid = bounds.centre()[axis];
-    let k = items.partition_point(|it| it.centroid[axis] < mid);
+    let k = items.partition_point(|it| it.centroid(axis) < mid);
     if separates(k) {
         return Some(k);
     }
-    let mean = items.iter().map(|it| it.centroid[axis]).sum::<f32>() / n as f32;
-    let k = items.partition_point(|it| it.centroid[axis] < mean);
+    let mean = items.iter().map(|it| it.centroid(axis)).sum::<f32>() / n as f32;
+    let k = items.partition_point(|it| it.centroid(axis) < mean);
     Some(if separates(k) { k } else { n / 2 })
 }
 
@@ -171,7 +176,7 @@ fn sah_split(items: &mut [Item], bounds: &Aabb) -> Option<usize> {
         }
         let mut bins = [(Aabb::EMPTY, 0usize); BINS];
         for it in items.iter() {
-            let b = &mut bins[bin_of(it.centroid[axis], axis)];
+            let b = &mut bins[bin_of(it.centroid(axis), axis)];
             b.0 = b.0.union(it.bounds);
             b.1 += 1;
         }
@@ -207,7 +212,7 @@ fn sah_split(items: &mut [Item], bounds: &Aabb) -> Option<usize> {
     }
     let mut k = 0;
     for i in 0..n {
-        if bin_of(items[i].centroid[axis], axis) <= last_left {
+        if bin_of(items[i].centroid(axis), axis) <= last_left {
             items.swap(i, k);
             k += 1;
         }
@@ -217,6 +222,8 @@ fn sah_split(items: &mut [Item], bounds: &Aabb) -> Option<usize> {
 
 #[cfg(test)]
 mod tests {
+    use glam::Vec3;
+
     use super::*;
     use crate::accel::bvh2::Bvh2;
     use crate::prim::PrimKind;
@@ -232,7 +239,6 @@ mod tests {
                         min: c - 0.1,
                         max: c + 0.1,
                     },
-                    centroid: c,
                     prim: PrimId::new(PrimKind::Sphere, i as u32),
                 }
             })
@@ -295,7 +301,7 @@ mod tests {
         let mut a = items(&[0.0, 0.1, 0.2, 50.0, 50.1]);
         let bounds = a.iter().fold(Aabb::EMPTY, |b, i| b.union(i.bounds));
         assert_eq!(sah_split(&mut a, &bounds), Some(3));
-        assert!(a[..3].iter().all(|it| it.centroid.x < 1.0));
+        assert!(a[..3].iter().all(|it| it.centroid(0) < 1.0));
         let mut b = items(&[0.0, 0.01]);
         let bounds = b.iter().fold(Aabb::EMPTY, |b, i| b.union(i.bounds));
         assert_eq!(sah_split(&mut b, &bounds), None);
