@@ -1,6 +1,6 @@
 //! The two builds of the binary BVH: the course report's midpoint split and the binned
-//! SAH. Both append nodes depth first to one array and reorder the primitives so that
-//! each leaf's are contiguous.
+//! SAH. Both write nodes depth first into one array, allocated once, and reorder the
+//! primitives so that each leaf's are contiguous.
 
 use super::{BvhBuild, Node, TRAVERSAL_COST};
 use crate::accel::bounds::prim_bounds;
@@ -37,6 +37,14 @@ impl Item {
 
 const _: () = assert!(std::mem::size_of::<Item>() == 28);
 
+/// What the node array holds until the build writes it.
+const UNUSED: Node = Node {
+    min: [0.0; 3],
+    offset: 0,
+    max: [0.0; 3],
+    count: 0,
+};
+
 /// The nodes, depth first, and the primitives in leaf order, over every bounded
 /// primitive of `geometry` whose box (moving spheres over `shutter`) is not empty.
 pub(super) fn build(
@@ -53,25 +61,39 @@ pub(super) fn build(
             }
         }
     }
-    let mut nodes = Vec::with_capacity(2 * items.len() / MIDPOINT_LEAF.max(1) + 1);
+    // A tree of n primitives has at most 2n - 1 nodes: the array is allocated once, at
+    // that size, and never grows (growing it copied it at twice its size, the peak of
+    // `tests/huge_scene.rs`).
+    let mut nodes = vec![UNUSED; (2 * items.len()).saturating_sub(1)];
     if !items.is_empty() {
-        grow(&mut nodes, &mut items, 0, 0, build);
+        let used = grow(&mut nodes, 0, &mut items, 0, 0, build);
+        nodes.truncate(used);
     }
     let prims = items.iter().map(|it| it.prim).collect();
+    // The items go before the nodes shrink to what is used, so both are never held at once.
+    drop(items);
+    nodes.shrink_to_fit();
     (nodes, prims)
 }
 
 /// Builds the subtree over `items` (which start at `offset` in the final primitive
-/// order) at the end of `nodes`, depth first.
-fn grow(nodes: &mut Vec<Node>, items: &mut [Item], offset: usize, depth: usize, build: BvhBuild) {
+/// order) at the start of `nodes`, whose first node is `base` in the whole array, depth
+/// first; returns the number of nodes it took. `nodes` holds at least `2 items.len() - 1`.
+fn grow(
+    nodes: &mut [Node],
+    base: usize,
+    items: &mut [Item],
+    offset: usize,
+    depth: usize,
+    build: BvhBuild,
+) -> usize {
     let bounds = items.iter().fold(Aabb::EMPTY, |b, it| b.union(it.bounds));
-    let index = nodes.len();
-    nodes.push(Node {
+    nodes[0] = Node {
         min: bounds.min.to_array(),
         offset: offset as u32,
         max: bounds.max.to_array(),
         count: items.len() as u32,
-    });
+    };
     let leaf_size = match build {
         BvhBuild::Midpoint => MIDPOINT_LEAF,
         BvhBuild::Sah => MAX_LEAF,
@@ -85,35 +107,38 @@ fn grow(nodes: &mut Vec<Node>, items: &mut [Item], offset: usize, depth: usize, 
         }
     };
     let Some(k) = split else {
-        return;
+        return 1;
     };
     let (left, right) = items.split_at_mut(k);
-    if left.len() + right.len() > PARALLEL_BUILD {
-        // The two subtrees on two threads, then the right one's nodes appended after
-        // the left one's: the same array as one thread builds.
-        let (_, mut right_nodes) = rayon::join(
-            || grow(nodes, left, offset, depth + 1, build),
-            || {
-                let mut right_nodes = Vec::new();
-                grow(&mut right_nodes, right, offset + k, depth + 1, build);
-                right_nodes
-            },
+    let (left_used, right_used) = if left.len() + right.len() > PARALLEL_BUILD {
+        // The two subtrees on two threads, the right one after the most room the left
+        // one can take (2k - 1 nodes), then moved down to follow it: the same array as
+        // one thread builds.
+        let room = 2 * k - 1;
+        let (left_nodes, right_nodes) = nodes[1..].split_at_mut(room);
+        let right_base = base + 1 + room;
+        let (left_used, right_used) = rayon::join(
+            || grow(left_nodes, base + 1, left, offset, depth + 1, build),
+            || grow(right_nodes, right_base, right, offset + k, depth + 1, build),
         );
-        let right_index = nodes.len() as u32;
-        for node in &mut right_nodes {
+        let (from, shift) = (1 + room, room - left_used);
+        for node in &mut nodes[from..from + right_used] {
             if node.count == 0 {
-                node.offset += right_index;
+                node.offset -= shift as u32;
             }
         }
-        nodes.append(&mut right_nodes);
-        nodes[index].offset = right_index;
+        nodes.copy_within(from..from + right_used, 1 + left_used);
+        (left_used, right_used)
     } else {
-        grow(nodes, left, offset, depth + 1, build);
-        let right_index = nodes.len() as u32;
-        grow(nodes, right, offset + k, depth + 1, build);
-        nodes[index].offset = right_index;
-    }
-    nodes[index].count = 0;
+        let left_used = grow(&mut nodes[1..], base + 1, left, offset, depth + 1, build);
+        let right_nodes = &mut nodes[1 + left_used..];
+        let right_base = base + 1 + left_used;
+        let right_used = grow(right_nodes, right_base, right, offset + k, depth + 1, build);
+        (left_used, right_used)
+    };
+    nodes[0].offset = (base + 1 + left_used) as u32;
+    nodes[0].count = 0;
+    1 + left_used + right_used
 }
 
 fn centroid_bounds(items: &[Item]) -> Aabb {
