@@ -17,8 +17,10 @@ const CELLS: [u32; 2] = [2500, 2000];
 const TRIANGLES: usize = 10_000_000;
 
 /// The most heap a triangle may take at the peak of storing, building the default BVH and
-/// rendering (230 measured, BENCHMARKS.md: 74 for the triangle arrays as they grow).
-const MAX_BYTES_PER_TRIANGLE: f64 = 260.0;
+/// rendering (174 measured, BENCHMARKS.md: 74 for the triangle arrays as they grow, 4 for
+/// the primitive order and 64 for the binary nodes' array at the most a tree can take,
+/// counted once more at the 32 the tree uses while the array shrinks to them).
+const MAX_BYTES_PER_TRIANGLE: f64 = 180.0;
 
 /// A gentle landscape, so that the SAH has shapes to split.
 fn height(x: u32, y: u32) -> f32 {

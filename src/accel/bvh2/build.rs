@@ -1,8 +1,6 @@
 //! The two builds of the binary BVH: the course report's midpoint split and the binned
-//! SAH. Both append nodes depth first to one array and reorder the primitives so that
-//! each leaf's are contiguous.
-
-use glam::Vec3;
+//! SAH. Both write nodes depth first into one array, allocated once, and reorder the
+//! primitives so that each leaf's are contiguous.
 
 use super::{BvhBuild, Node, TRAVERSAL_COST};
 use crate::accel::bounds::prim_bounds;
@@ -22,13 +20,30 @@ const FREE_DEPTH: usize = 64;
 /// Subtrees over more primitives than this are built on two threads.
 const PARALLEL_BUILD: usize = 4096;
 
-/// A primitive during the build.
+/// A primitive during the build: 28 bytes, for the items and the nodes are the build's
+/// largest arrays. The centroid is the box's centre, recomputed where it is needed.
 #[derive(Clone, Copy)]
 struct Item {
     bounds: Aabb,
-    centroid: Vec3,
     prim: PrimId,
 }
+
+impl Item {
+    /// The centroid's coordinate on `axis` (as `Aabb::centre` computes it).
+    fn centroid(&self, axis: usize) -> f32 {
+        0.5 * (self.bounds.min[axis] + self.bounds.max[axis])
+    }
+}
+
+const _: () = assert!(std::mem::size_of::<Item>() == 28);
+
+/// What the node array holds until the build writes it.
+const UNUSED: Node = Node {
+    min: [0.0; 3],
+    offset: 0,
+    max: [0.0; 3],
+    count: 0,
+};
 
 /// The nodes, depth first, and the primitives in leaf order, over every bounded
 /// primitive of `geometry` whose box (moving spheres over `shutter`) is not empty.
@@ -42,33 +57,43 @@ pub(super) fn build(
         for prim in geometry.ids(kind) {
             let bounds = prim_bounds(geometry, prim, shutter);
             if !bounds.is_empty() {
-                items.push(Item {
-                    bounds,
-                    centroid: bounds.centre(),
-                    prim,
-                });
+                items.push(Item { bounds, prim });
             }
         }
     }
-    let mut nodes = Vec::with_capacity(2 * items.len() / MIDPOINT_LEAF.max(1) + 1);
+    // A tree of n primitives has at most 2n - 1 nodes: the array is allocated once, at
+    // that size, and never grows (growing it copied it at twice its size, the peak of
+    // `tests/huge_scene.rs`).
+    let mut nodes = vec![UNUSED; (2 * items.len()).saturating_sub(1)];
     if !items.is_empty() {
-        grow(&mut nodes, &mut items, 0, 0, build);
+        let used = grow(&mut nodes, 0, &mut items, 0, 0, build);
+        nodes.truncate(used);
     }
     let prims = items.iter().map(|it| it.prim).collect();
+    // The items go before the nodes shrink to what is used, so both are never held at once.
+    drop(items);
+    nodes.shrink_to_fit();
     (nodes, prims)
 }
 
 /// Builds the subtree over `items` (which start at `offset` in the final primitive
-/// order) at the end of `nodes`, depth first.
-fn grow(nodes: &mut Vec<Node>, items: &mut [Item], offset: usize, depth: usize, build: BvhBuild) {
+/// order) at the start of `nodes`, whose first node is `base` in the whole array, depth
+/// first; returns the number of nodes it took. `nodes` holds at least `2 items.len() - 1`.
+fn grow(
+    nodes: &mut [Node],
+    base: usize,
+    items: &mut [Item],
+    offset: usize,
+    depth: usize,
+    build: BvhBuild,
+) -> usize {
     let bounds = items.iter().fold(Aabb::EMPTY, |b, it| b.union(it.bounds));
-    let index = nodes.len();
-    nodes.push(Node {
+    nodes[0] = Node {
         min: bounds.min.to_array(),
         offset: offset as u32,
         max: bounds.max.to_array(),
         count: items.len() as u32,
-    });
+    };
     let leaf_size = match build {
         BvhBuild::Midpoint => MIDPOINT_LEAF,
         BvhBuild::Sah => MAX_LEAF,
@@ -82,39 +107,44 @@ fn grow(nodes: &mut Vec<Node>, items: &mut [Item], offset: usize, depth: usize, 
         }
     };
     let Some(k) = split else {
-        return;
+        return 1;
     };
     let (left, right) = items.split_at_mut(k);
-    if left.len() + right.len() > PARALLEL_BUILD {
-        // The two subtrees on two threads, then the right one's nodes appended after
-        // the left one's: the same array as one thread builds.
-        let (_, mut right_nodes) = rayon::join(
-            || grow(nodes, left, offset, depth + 1, build),
-            || {
-                let mut right_nodes = Vec::new();
-                grow(&mut right_nodes, right, offset + k, depth + 1, build);
-                right_nodes
-            },
+    let (left_used, right_used) = if left.len() + right.len() > PARALLEL_BUILD {
+        // The two subtrees on two threads, the right one after the most room the left
+        // one can take (2k - 1 nodes), then moved down to follow it: the same array as
+        // one thread builds.
+        let room = 2 * k - 1;
+        let (left_nodes, right_nodes) = nodes[1..].split_at_mut(room);
+        let right_base = base + 1 + room;
+        let (left_used, right_used) = rayon::join(
+            || grow(left_nodes, base + 1, left, offset, depth + 1, build),
+            || grow(right_nodes, right_base, right, offset + k, depth + 1, build),
         );
-        let right_index = nodes.len() as u32;
-        for node in &mut right_nodes {
+        let (from, shift) = (1 + room, room - left_used);
+        for node in &mut nodes[from..from + right_used] {
             if node.count == 0 {
-                node.offset += right_index;
+                node.offset -= shift as u32;
             }
         }
-        nodes.append(&mut right_nodes);
-        nodes[index].offset = right_index;
+        nodes.copy_within(from..from + right_used, 1 + left_used);
+        (left_used, right_used)
     } else {
-        grow(nodes, left, offset, depth + 1, build);
-        let right_index = nodes.len() as u32;
-        grow(nodes, right, offset + k, depth + 1, build);
-        nodes[index].offset = right_index;
-    }
-    nodes[index].count = 0;
+        let left_used = grow(&mut nodes[1..], base + 1, left, offset, depth + 1, build);
+        let right_nodes = &mut nodes[1 + left_used..];
+        let right_base = base + 1 + left_used;
+        let right_used = grow(right_nodes, right_base, right, offset + k, depth + 1, build);
+        (left_used, right_used)
+    };
+    nodes[0].offset = (base + 1 + left_used) as u32;
+    nodes[0].count = 0;
+    1 + left_used + right_used
 }
 
 fn centroid_bounds(items: &[Item]) -> Aabb {
-    items.iter().fold(Aabb::EMPTY, |b, it| b.grow(it.centroid))
+    items
+        .iter()
+        .fold(Aabb::EMPTY, |b, it| b.grow(it.bounds.centre()))
 }
 
 /// Splits at the median centroid along the centroids' longest axis, or makes a leaf
@@ -125,7 +155,7 @@ fn median_split(items: &mut [Item], leaf_size: usize) -> Option<usize> {
     }
     let axis = centroid_bounds(items).longest_axis();
     let k = items.len() / 2;
-    items.select_nth_unstable_by(k, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+    items.select_nth_unstable_by(k, |a, b| a.centroid(axis).total_cmp(&b.centroid(axis)));
     Some(k)
 }
 
@@ -137,15 +167,15 @@ fn midpoint_split(items: &mut [Item], bounds: &Aabb) -> Option<usize> {
         return None;
     }
     let axis = bounds.longest_axis();
-    items.sort_unstable_by(|a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+    items.sort_unstable_by(|a, b| a.centroid(axis).total_cmp(&b.centroid(axis)));
     let separates = |k: usize| k > 0 && k < n;
     let mid = bounds.centre()[axis];
-    let k = items.partition_point(|it| it.centroid[axis] < mid);
+    let k = items.partition_point(|it| it.centroid(axis) < mid);
     if separates(k) {
         return Some(k);
     }
-    let mean = items.iter().map(|it| it.centroid[axis]).sum::<f32>() / n as f32;
-    let k = items.partition_point(|it| it.centroid[axis] < mean);
+    let mean = items.iter().map(|it| it.centroid(axis)).sum::<f32>() / n as f32;
+    let k = items.partition_point(|it| it.centroid(axis) < mean);
     Some(if separates(k) { k } else { n / 2 })
 }
 
@@ -171,7 +201,7 @@ fn sah_split(items: &mut [Item], bounds: &Aabb) -> Option<usize> {
         }
         let mut bins = [(Aabb::EMPTY, 0usize); BINS];
         for it in items.iter() {
-            let b = &mut bins[bin_of(it.centroid[axis], axis)];
+            let b = &mut bins[bin_of(it.centroid(axis), axis)];
             b.0 = b.0.union(it.bounds);
             b.1 += 1;
         }
@@ -207,7 +237,7 @@ fn sah_split(items: &mut [Item], bounds: &Aabb) -> Option<usize> {
     }
     let mut k = 0;
     for i in 0..n {
-        if bin_of(items[i].centroid[axis], axis) <= last_left {
+        if bin_of(items[i].centroid(axis), axis) <= last_left {
             items.swap(i, k);
             k += 1;
         }
@@ -217,6 +247,8 @@ fn sah_split(items: &mut [Item], bounds: &Aabb) -> Option<usize> {
 
 #[cfg(test)]
 mod tests {
+    use glam::Vec3;
+
     use super::*;
     use crate::accel::bvh2::Bvh2;
     use crate::prim::PrimKind;
@@ -232,7 +264,6 @@ mod tests {
                         min: c - 0.1,
                         max: c + 0.1,
                     },
-                    centroid: c,
                     prim: PrimId::new(PrimKind::Sphere, i as u32),
                 }
             })
@@ -295,7 +326,7 @@ mod tests {
         let mut a = items(&[0.0, 0.1, 0.2, 50.0, 50.1]);
         let bounds = a.iter().fold(Aabb::EMPTY, |b, i| b.union(i.bounds));
         assert_eq!(sah_split(&mut a, &bounds), Some(3));
-        assert!(a[..3].iter().all(|it| it.centroid.x < 1.0));
+        assert!(a[..3].iter().all(|it| it.centroid(0) < 1.0));
         let mut b = items(&[0.0, 0.01]);
         let bounds = b.iter().fold(Aabb::EMPTY, |b, i| b.union(i.bounds));
         assert_eq!(sah_split(&mut b, &bounds), None);

@@ -2,7 +2,8 @@
 //! node's two children, and the child with the largest surface area is replaced by its
 //! own two children while fewer than eight remain and some child is interior (Wald et
 //! al., "Getting Rid of Packets", 2008). The binary tree is consumed: its primitive order
-//! is kept, its nodes freed once converted.
+//! is kept, its nodes freed once converted. A first pass counts the 8-wide tree's nodes
+//! and packs, so that its arrays are allocated once at their size.
 
 use std::ops::Range;
 
@@ -28,67 +29,57 @@ impl Bvh8 {
         if bvh2.prims().len() > MAX_PRIMS || !leaves_fit {
             return Err(bvh2);
         }
-        let (binary, build) = (bvh2.stats(), bvh2.build_kind());
+        let (stats, build) = (bvh2.stats(), bvh2.build_kind());
         let (nodes, prims) = bvh2.into_parts();
+        let binary = Binary {
+            nodes: &nodes,
+            prims: &prims,
+        };
+        let root = Kid {
+            node: 0,
+            range: 0..prims.len(),
+        };
+        let root_kids = if nodes.is_empty() {
+            vec![]
+        } else if binary.is_terminal(&root) {
+            vec![root]
+        } else {
+            binary.children(&root)
+        };
+        // Counted first and allocated at their size: growing them held up to twice that,
+        // and copied them, beside the binary tree at its largest (`tests/huge_mesh.rs`).
+        let mut size = Size::default();
+        if !root_kids.is_empty() {
+            binary.size(root_kids.clone(), &mut size);
+        }
         let mut tree = Bvh8 {
-            // Grown as needed: an estimate from the binary tree's size reserved many times
-            // what a tree of one-primitive leaves uses (`tests/huge_scene.rs`: 5 million
-            // nodes reserved, 0.3 million used).
-            nodes: Vec::new(),
-            prims,
-            triangles: Vec::new(),
-            spheres: Vec::new(),
+            nodes: Vec::with_capacity(size.nodes),
+            prims: Vec::new(),
+            triangles: Vec::with_capacity(size.triangles),
+            spheres: Vec::with_capacity(size.spheres),
             sphere_roots: geometry.spheres.roots,
-            triangle_ids: Vec::new(),
-            sphere_ids: Vec::new(),
+            triangle_ids: Vec::with_capacity(size.triangles),
+            sphere_ids: Vec::with_capacity(size.spheres),
             depth: 0,
             build,
-            binary,
+            binary: stats,
         };
-        if !nodes.is_empty() {
-            let binary = Binary::new(&nodes);
-            let root_children = if binary.is_terminal(0, &tree.prims) {
-                vec![0]
-            } else {
-                binary.children(0)
-            };
-            tree.depth = tree.emit(geometry, &binary, root_children);
+        if !root_kids.is_empty() {
+            tree.depth = tree.emit(geometry, &binary, root_kids);
         }
-        // The render holds the tree: none of the arrays' growing slack.
-        tree.nodes.shrink_to_fit();
-        tree.triangles.shrink_to_fit();
-        tree.spheres.shrink_to_fit();
-        tree.triangle_ids.shrink_to_fit();
-        tree.sphere_ids.shrink_to_fit();
+        tree.prims = prims;
         Ok(tree)
     }
 
-    /// Appends the node over the binary nodes `start` (expanded as the header says) and
-    /// its subtrees; returns the subtree's depth.
-    fn emit(&mut self, geometry: &Geometry, binary: &Binary, start: Vec<usize>) -> usize {
-        let mut kids = start;
-        while kids.len() < WIDTH {
-            let widest = kids
-                .iter()
-                .enumerate()
-                .filter(|(_, &i)| !binary.is_terminal(i, &self.prims))
-                .max_by(|(_, &a), (_, &b)| {
-                    binary.nodes[a]
-                        .bounds()
-                        .area()
-                        .total_cmp(&binary.nodes[b].bounds().area())
-                });
-            let Some((k, _)) = widest else {
-                break;
-            };
-            let i = kids.swap_remove(k);
-            kids.extend(binary.children(i));
-        }
+    /// Appends the node over the binary nodes `start` (expanded by [`Binary::expand`])
+    /// and its subtrees; returns the subtree's depth.
+    fn emit(&mut self, geometry: &Geometry, binary: &Binary, start: Vec<Kid>) -> usize {
+        let kids = binary.expand(start);
         let index = self.nodes.len();
         let boxes: Vec<(Vec3, Vec3)> = kids
             .iter()
-            .map(|&i| {
-                let b = binary.nodes[i].bounds();
+            .map(|kid| {
+                let b = binary.nodes[kid.node].bounds();
                 (b.min, b.max)
             })
             .collect();
@@ -98,16 +89,15 @@ impl Bvh8 {
             count: kids.len() as u32,
         });
         let mut depth = 1;
-        for (k, &i) in kids.iter().enumerate() {
-            let child = match binary.pack_kind(i, &self.prims) {
-                Some(kind) => self.pack(geometry, kind, binary.range[i].clone()),
-                None if binary.nodes[i].is_leaf() => {
-                    let range = binary.range[i].clone();
-                    leaf_ref(RUN, range.len(), range.start)
+        for (k, kid) in kids.iter().enumerate() {
+            let child = match binary.pack_kind(kid) {
+                Some(kind) => self.pack(geometry, kind, &binary.prims[kid.range.clone()]),
+                None if binary.nodes[kid.node].is_leaf() => {
+                    leaf_ref(RUN, kid.range.len(), kid.range.start)
                 }
                 None => {
                     let child = self.nodes.len() as u32;
-                    depth = depth.max(1 + self.emit(geometry, binary, binary.children(i)));
+                    depth = depth.max(1 + self.emit(geometry, binary, binary.children(kid)));
                     child
                 }
             };
@@ -116,9 +106,8 @@ impl Bvh8 {
         depth
     }
 
-    /// Stores the primitives `range` of `prims`, all of `kind`, as one pack.
-    fn pack(&mut self, geometry: &Geometry, kind: PrimKind, range: Range<usize>) -> ChildRef {
-        let ids = &self.prims[range];
+    /// Stores the primitives `ids`, all of `kind`, as one pack.
+    fn pack(&mut self, geometry: &Geometry, kind: PrimKind, ids: &[PrimId]) -> ChildRef {
         let mut lanes = [ids[0]; 8];
         lanes[..ids.len()].copy_from_slice(ids);
         let indices = ids.iter().map(|id| id.index());
@@ -137,43 +126,97 @@ impl Bvh8 {
 /// The most primitives of one kind stored side by side in a leaf.
 const PACK: usize = 8;
 
-/// The binary tree with the run of primitives under each node.
-struct Binary<'a> {
-    nodes: &'a [Node],
-    range: Vec<Range<usize>>,
+/// A node of the binary tree and the run of primitives under it.
+#[derive(Clone)]
+struct Kid {
+    node: usize,
+    range: Range<usize>,
 }
 
-impl<'a> Binary<'a> {
-    fn new(nodes: &'a [Node]) -> Self {
-        // Children follow their parent, so a backward sweep sees them first.
-        let mut range = vec![0..0; nodes.len()];
-        for i in (0..nodes.len()).rev() {
-            range[i] = if nodes[i].is_leaf() {
-                nodes[i].prim_range()
-            } else {
-                range[i + 1].start..range[nodes[i].right_child()].end
-            };
+/// The binary tree and its primitive order.
+struct Binary<'a> {
+    nodes: &'a [Node],
+    prims: &'a [PrimId],
+}
+
+/// What an 8-wide tree holds: its nodes, triangle packs and sphere packs.
+#[derive(Default)]
+struct Size {
+    nodes: usize,
+    triangles: usize,
+    spheres: usize,
+}
+
+impl Binary<'_> {
+    /// The two children of the interior node `kid`. The right one's primitives start at
+    /// its leftmost leaf's, which its left children lead to: no range is stored per node.
+    fn children(&self, kid: &Kid) -> Vec<Kid> {
+        let right = self.nodes[kid.node].right_child();
+        let mut first = right;
+        while !self.nodes[first].is_leaf() {
+            first += 1;
         }
-        Binary { nodes, range }
+        let split = self.nodes[first].prim_range().start;
+        vec![
+            Kid {
+                node: kid.node + 1,
+                range: kid.range.start..split,
+            },
+            Kid {
+                node: right,
+                range: split..kid.range.end,
+            },
+        ]
     }
 
-    /// The two children of the interior node `i`.
-    fn children(&self, i: usize) -> Vec<usize> {
-        vec![i + 1, self.nodes[i].right_child()]
+    /// The children of the 8-wide node over `start`: the child with the largest surface
+    /// area replaced by its own two children while fewer than eight remain and some child
+    /// is interior.
+    fn expand(&self, start: Vec<Kid>) -> Vec<Kid> {
+        let mut kids = start;
+        while kids.len() < WIDTH {
+            let widest = kids
+                .iter()
+                .enumerate()
+                .filter(|(_, kid)| !self.is_terminal(kid))
+                .max_by(|(_, a), (_, b)| {
+                    let area = |kid: &Kid| self.nodes[kid.node].bounds().area();
+                    area(a).total_cmp(&area(b))
+                });
+            let Some((k, _)) = widest else {
+                break;
+            };
+            let kid = kids.swap_remove(k);
+            kids.extend(self.children(&kid));
+        }
+        kids
+    }
+
+    /// Adds to `size` what [`Bvh8::emit`] appends for the node over `start`.
+    fn size(&self, start: Vec<Kid>, size: &mut Size) {
+        size.nodes += 1;
+        for kid in self.expand(start) {
+            match self.pack_kind(&kid) {
+                Some(PrimKind::Triangle) => size.triangles += 1,
+                Some(_) => size.spheres += 1,
+                None if self.nodes[kid.node].is_leaf() => {}
+                None => self.size(self.children(&kid), size),
+            }
+        }
     }
 
     /// The kind of a subtree that becomes one pack: at most [`PACK`] triangles, or
-    /// spheres (`prims` in the tree's order).
-    fn pack_kind(&self, i: usize, prims: &[PrimId]) -> Option<PrimKind> {
-        let prims = &prims[self.range[i].clone()];
+    /// spheres.
+    fn pack_kind(&self, kid: &Kid) -> Option<PrimKind> {
+        let prims = &self.prims[kid.range.clone()];
         let kind = prims.first()?.kind();
         let packable = matches!(kind, PrimKind::Triangle | PrimKind::Sphere);
         (packable && prims.len() <= PACK && prims.iter().all(|p| p.kind() == kind)).then_some(kind)
     }
 
     /// Nodes that become leaves of the 8-wide tree.
-    fn is_terminal(&self, i: usize, prims: &[PrimId]) -> bool {
-        self.nodes[i].is_leaf() || self.pack_kind(i, prims).is_some()
+    fn is_terminal(&self, kid: &Kid) -> bool {
+        self.nodes[kid.node].is_leaf() || self.pack_kind(kid).is_some()
     }
 }
 
