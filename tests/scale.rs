@@ -16,11 +16,15 @@ mod common;
 
 use std::path::Path;
 
+use glam::Vec3;
 use p3trace::accel::AccelOptions;
 use p3trace::compare::{compare, Levels};
+use p3trace::intersect::{spawn_origin, Shapes, Spheres, Triangles};
+use p3trace::ray::Ray;
 use p3trace::render::film::to_byte;
 use p3trace::render::{render, RenderOptions};
 use p3trace::scene::{parse_str_in, Frame};
+use proptest::prelude::*;
 
 /// How a number of a directive changes: a coordinate of a position, a length, or not.
 #[derive(Clone, Copy, PartialEq)]
@@ -190,4 +194,97 @@ fn the_rewrite_scales_positions_and_lengths_only() {
          l 12.0 2.0 2.0 0.5 0.5 0.5 f 1 0 0 1 1 1 1 1 10 0 1 s 12.0 4.0 6.0 1.0 \
          p 3 10.0 0.0 0.0 12.0 0.0 0.0 10.0 2.0 0.0 c 10.0 0.0 0.0 2.0 10.0 0.0 4.0 1.0"
     );
+}
+
+/// A unit vector from two numbers in [0, 1).
+fn unit(a: f32, b: f32) -> Vec3 {
+    let z = 2.0 * a - 1.0;
+    let phi = std::f32::consts::TAU * b;
+    let s = (1.0 - z * z).max(0.0).sqrt();
+    Vec3::new(s * phi.cos(), s * phi.sin(), z)
+}
+
+/// A direction on the side `side` of a surface, at least about 0.06 degrees off it.
+fn leaving(side: Vec3, a: f32, b: f32) -> Vec3 {
+    let d = unit(a, b);
+    let d = if d.dot(side) < 0.0 {
+        d - 2.0 * d.dot(side) * side
+    } else {
+        d
+    };
+    (d + 0.001 * side).normalize()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        max_global_rejects: 2000,
+        ..ProptestConfig::with_cases(20000)
+    })]
+
+    /// A ray spawned at a sphere's hit never meets the sphere again on the way out, and
+    /// going in it meets the far side, at any size and any distance from the origin.
+    #[test]
+    fn rays_spawned_off_a_sphere_clear_it(
+        centre in prop::array::uniform3(-1e4f32..1e4),
+        log_radius in -3.0f32..3.0,
+        (a, b, c, d, e, f) in (0f32..1.0, 0f32..1.0, 0f32..1.0, 0f32..1.0, 0f32..1.0, 0f32..1.0),
+        distance in 1.5f32..100.0,
+    ) {
+        // A sphere a few floats wide at its place is a point: keep it 1e4 times wider
+        // than its centre's floats.
+        let centre = Vec3::from(centre);
+        let radius = 10f32.powf(log_radius).max(1e-4 * centre.abs().max_element());
+        let mut spheres = Spheres::default();
+        spheres.centre.push(centre);
+        spheres.radius.push(radius);
+        spheres.material.push(0);
+        let origin = centre + distance * radius * unit(a, b);
+        let target = centre + 0.95 * radius * unit(c, d);
+        let ray = Ray::new(origin, (target - origin).normalize());
+        let hit = spheres.intersect(0, &ray, ray.dir.recip(), 0.0, f32::INFINITY);
+        // Rejected, not passed: too many misses fail the test.
+        prop_assume!(hit.is_some());
+        let hit = hit.unwrap();
+        let at = spheres.surface_point(0, &ray, hit.t, hit.u, hit.v);
+        let out = leaving(at.normal, e, f);
+        let away = Ray::new(spawn_origin(at.point, at.error, at.normal), out);
+        prop_assert_eq!(spheres.intersect(0, &away, away.dir.recip(), 0.0, f32::INFINITY), None);
+        let inward = Ray::new(spawn_origin(at.point, at.error, -at.normal), -out);
+        // The chord is 2 r cos, for the cosine with the inward normal.
+        let chord = 2.0 * radius * out.dot(at.normal);
+        let far = spheres.intersect(0, &inward, inward.dir.recip(), 0.0, f32::INFINITY);
+        prop_assert!(far.is_some_and(|h| h.t > 0.5 * chord), "{far:?}, chord {chord}");
+    }
+
+    /// A ray spawned at a triangle's hit, on either side, never meets the triangle again,
+    /// slivers included.
+    #[test]
+    fn rays_spawned_off_a_triangle_clear_it(
+        at in prop::array::uniform3(-1e4f32..1e4),
+        log_size in -3.0f32..3.0,
+        corners in prop::array::uniform6(-1f32..1.0),
+        (a, b, c, d, e) in (0f32..1.0, 0f32..1.0, 0f32..1.0, 0f32..1.0, 0f32..1.0),
+    ) {
+        let size = 10f32.powf(log_size);
+        let p0 = Vec3::from(at);
+        let p1 = p0 + size * Vec3::new(corners[0], corners[1], corners[2]);
+        let p2 = p0 + size * Vec3::new(corners[3], corners[4], corners[5]);
+        let mut triangles = Triangles::default();
+        triangles.push([p0, p1, p2], None, 0);
+        // Inside, away from the edges.
+        let (u, v) = (0.05 + 0.85 * a * (1.0 - b), 0.05 + 0.85 * b * (1.0 - a));
+        let target = p0 + u * (p1 - p0) + v * (p2 - p0);
+        let origin = target + 10.0 * size * unit(c, d);
+        let ray = Ray::new(origin, (target - origin).normalize());
+        let hit = triangles.intersect(0, &ray, ray.dir.recip(), 0.0, f32::INFINITY);
+        // Rejected, not passed: too many misses fail the test.
+        prop_assume!(hit.is_some());
+        let hit = hit.unwrap();
+        let at = triangles.surface_point(0, &ray, hit.t, hit.u, hit.v);
+        for side in [at.normal, -at.normal] {
+            let away = Ray::new(spawn_origin(at.point, at.error, side), leaving(side, e, c));
+            let again = triangles.intersect(0, &away, away.dir.recip(), 0.0, f32::INFINITY);
+            prop_assert_eq!(again, None);
+        }
+    }
 }

@@ -235,7 +235,7 @@ impl Shapes for Boxes {
 
     /// `p` with the coordinate of the face hit set to the face's: exact, and the slab
     /// test's `(face - origin)` has the exact sign, so the one float
-    /// [`SurfacePoint::spawn`] adds is enough.
+    /// [`super::spawn_origin`] adds is enough.
     fn surface_point(&self, i: usize, ray: &Ray, t: f32, _u: f32, _v: f32) -> SurfacePoint {
         let (min, max, p) = (self.min.get(i), self.max.get(i), ray.at(t));
         let normal = aabb_normal(min, max, p);

@@ -167,7 +167,7 @@ pub const GAMMA_3: f32 = gamma(3);
 
 /// A hit recomputed on the surface it hit ([`Shapes::surface_point`]): the point, a bound
 /// of its remaining rounding error on each axis, and the outward unit normal there. Rays
-/// spawned at a hit start from it ([`SurfacePoint::spawn`]).
+/// spawned at a hit start from it ([`spawn_origin`]).
 ///
 /// `ray.at(t)` is off the surface by the error of `t`, which cancellation can make
 /// thousands of ulps (a small sphere seen from afar, a grazing hit), and a normal taken
@@ -183,24 +183,23 @@ pub struct SurfacePoint {
     pub normal: Vec3,
 }
 
-impl SurfacePoint {
-    /// The origin of a ray leaving on the side of the unit vector `side` (the normal facing
-    /// where the ray goes): `point` moved along `side` by the error bound's extent along it,
-    /// then each coordinate one float further that way, so that an error bound of zero
-    /// still leaves the surface (pbrt-v4's `OffsetRayOrigin`).
-    pub fn spawn(&self, side: Vec3) -> Vec3 {
-        let moved = self.point + self.error.dot(side.abs()) * side;
-        let away = |k: usize| {
-            if side[k] > 0.0 {
-                moved[k].next_up()
-            } else if side[k] < 0.0 {
-                moved[k].next_down()
-            } else {
-                moved[k]
-            }
-        };
-        Vec3::new(away(0), away(1), away(2))
-    }
+/// The origin of a ray leaving `point`, whose error is bounded by `error` on each axis,
+/// on the side of the unit vector `side` (the normal facing where the ray goes): `point`
+/// moved along `side` by the bound's extent along it, then each coordinate one float
+/// further that way, so that a bound of zero still leaves the surface (pbrt-v4's
+/// `OffsetRayOrigin`).
+pub fn spawn_origin(point: Vec3, error: Vec3, side: Vec3) -> Vec3 {
+    let moved = point + error.dot(side.abs()) * side;
+    let away = |k: usize| {
+        if side[k] > 0.0 {
+            moved[k].next_up()
+        } else if side[k] < 0.0 {
+            moved[k].next_down()
+        } else {
+            moved[k]
+        }
+    };
+    Vec3::new(away(0), away(1), away(2))
 }
 
 /// The first of two roots `near <= far` that lies in `(t_min, t_max)`: the entry of a

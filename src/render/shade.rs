@@ -10,7 +10,7 @@ use super::light::{emitters, Emitter, DEFAULT_LIGHT_GRID};
 use super::sampler::{dim, Sample, SampleGrid, SampleRng};
 use super::skybox::Skybox;
 use crate::accel::Tracer;
-use crate::intersect::{SphereRoots, SurfacePoint};
+use crate::intersect::{spawn_origin, SphereRoots, SurfacePoint};
 use crate::ray::{lane_mask, Hit, Ray, RayPacket};
 use crate::scene::{Frame, Material, Scene};
 
@@ -488,12 +488,7 @@ impl Surface {
     /// The origin of a ray spawned here that leaves on the side of `side`, `nf` or `-nf`.
     fn origin(&self, side: Vec3) -> Vec3 {
         match self.error {
-            Some(error) => SurfacePoint {
-                point: self.p,
-                error,
-                normal: self.nf,
-            }
-            .spawn(side),
+            Some(error) => spawn_origin(self.p, error, side),
             None => self.p + EPS * side,
         }
     }
