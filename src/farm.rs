@@ -104,6 +104,7 @@ pub struct Part {
 /// Anything else is an error naming the file; nothing here panics or allocates more than
 /// the header's checked size.
 pub fn read_part(bytes: &[u8], name: &str) -> Result<Part, String> {
+    use exr::compression::Compression;
     use exr::meta::attribute::{AttributeValue, SampleType};
     let bad = |why: String| format!("{name}: {why}");
     let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), true)
@@ -163,6 +164,26 @@ pub fn read_part(bytes: &[u8], name: &str) -> Result<Part, String> {
             )))
         }
     };
+    // Only lossless compressions keep the floats exact, and deflate expands at most
+    // 1032-fold: a forged header cannot make the reader allocate more pixels than the
+    // file's bytes could hold.
+    let fold = match header.compression {
+        Compression::Uncompressed => 1,
+        Compression::ZIP1 | Compression::ZIP16 => 1032,
+        other => {
+            return Err(bad(format!(
+                "compressed with {other:?}; p3trace writes parts with ZIP"
+            )))
+        }
+    };
+    if region.pixels() * 12 > bytes.len() as u64 * fold {
+        return Err(bad(format!(
+            "too short ({} bytes) for its {}x{} pixels",
+            bytes.len(),
+            region.width(),
+            region.height()
+        )));
+    }
     let note = match header.own_attributes.other.get(EXR_NOTE.as_bytes()) {
         Some(AttributeValue::Text(text)) => std::str::from_utf8(text.bytes())
             .map_err(|_| bad(format!("its '{EXR_NOTE}' attribute is not UTF-8")))?
@@ -231,7 +252,8 @@ fn read_pixels(bytes: &[u8], region: Region) -> Result<Vec<Vec3>, String> {
     Ok(pixels)
 }
 
-/// The frame being assembled from parts.
+/// The frame being assembled, one part at a time (a part's pixels can be dropped once
+/// laid).
 #[derive(Clone, Debug)]
 pub struct Canvas {
     /// What every part said (the note without tile lines).
@@ -239,59 +261,86 @@ pub struct Canvas {
     pub film: Film,
     /// Which pixels a part has covered, top row first.
     covered: Vec<bool>,
+    /// Which part set each covered pixel (an index into `names`), to name both sides of a
+    /// disagreement.
+    owner: Vec<u32>,
+    names: Vec<String>,
+    /// Each part's tile count, `None` for a crop.
+    tile_counts: Vec<Option<u32>>,
 }
 
 impl Canvas {
-    /// Lays `parts` on one image. Refuses parts of different renders (naming the first
-    /// line where their notes differ) and overlaps whose pixels are not bit for bit equal.
-    pub fn assemble(parts: &[Part]) -> Result<Canvas, String> {
-        let Some(first) = parts.first() else {
-            return Err("no parts to merge".into());
-        };
-        for part in &parts[1..] {
-            if part.identity != first.identity {
-                let line = first
-                    .identity
-                    .lines()
-                    .zip(part.identity.lines().chain(std::iter::repeat("")))
-                    .find(|(a, b)| a != b)
-                    .unwrap_or(("", ""));
+    /// An empty canvas for the frame `first` belongs to; [`Canvas::add`] lays the parts.
+    pub fn new(first: &Part) -> Canvas {
+        let (width, height) = first.image;
+        let pixels = width as usize * height as usize;
+        Canvas {
+            identity: first.identity.clone(),
+            film: Film::new(width, height),
+            covered: vec![false; pixels],
+            owner: vec![0; pixels],
+            names: Vec::new(),
+            tile_counts: Vec::new(),
+        }
+    }
+
+    /// Lays `part` on the canvas. Refuses a part of another render (naming the first line
+    /// where the notes differ) and an overlap whose pixels are not bit for bit equal.
+    pub fn add(&mut self, part: &Part) -> Result<(), String> {
+        let first = self
+            .names
+            .first()
+            .map_or(part.name.as_str(), String::as_str);
+        if part.identity != self.identity {
+            let (a, b) = self
+                .identity
+                .lines()
+                .zip(part.identity.lines().chain(std::iter::repeat("")))
+                .find(|(a, b)| a != b)
+                .unwrap_or(("", ""));
+            return Err(format!(
+                "{first} and {} are parts of different renders: '{a}' against '{b}'",
+                part.name
+            ));
+        }
+        let (width, height) = (self.film.width, self.film.height);
+        if part.image != (width, height) {
+            return Err(format!(
+                "{first} and {} are parts of different images: {width}x{height} against {}x{}",
+                part.name, part.image.0, part.image.1
+            ));
+        }
+        let k = self.names.len() as u32;
+        let r = part.region;
+        for (i, &colour) in part.pixels.iter().enumerate() {
+            let (x, y) = (r.x0 + i as u32 % r.width(), r.y0 + i as u32 / r.width());
+            let at = (y * width + x) as usize;
+            if !self.covered[at] {
+                self.covered[at] = true;
+                self.film.pixels[at] = colour;
+                self.owner[at] = k;
+                continue;
+            }
+            let before = self.film.pixels[at];
+            if before.to_array().map(f32::to_bits) != colour.to_array().map(f32::to_bits) {
                 return Err(format!(
-                    "{} and {} are parts of different renders: '{}' against '{}'",
-                    first.name, part.name, line.0, line.1
+                    "{} and {} overlap and disagree at pixel ({x}, {y}): {before} against {colour}",
+                    self.names[self.owner[at] as usize], part.name
                 ));
             }
         }
-        let (width, height) = first.image;
-        let mut canvas = Canvas {
-            identity: first.identity.clone(),
-            film: Film::new(width, height),
-            covered: vec![false; width as usize * height as usize],
-        };
-        // Which part set each pixel, to name both sides of a disagreement.
-        let mut owner = vec![0u32; canvas.covered.len()];
-        for (k, part) in parts.iter().enumerate() {
-            let r = part.region;
-            for (i, &colour) in part.pixels.iter().enumerate() {
-                let (x, y) = (r.x0 + i as u32 % r.width(), r.y0 + i as u32 / r.width());
-                let at = (y * width + x) as usize;
-                if canvas.covered[at] {
-                    let before = canvas.film.pixels[at];
-                    if before.to_array().map(f32::to_bits) != colour.to_array().map(f32::to_bits) {
-                        return Err(format!(
-                            "{} and {} overlap and disagree at pixel ({x}, {y}): \
-                             {before} against {colour}",
-                            parts[owner[at] as usize].name, part.name
-                        ));
-                    }
-                } else {
-                    canvas.covered[at] = true;
-                    canvas.film.pixels[at] = colour;
-                    owner[at] = k as u32;
-                }
-            }
-        }
-        Ok(canvas)
+        self.names.push(part.name.clone());
+        self.tile_counts.push(part.tile.map(|t| t.count));
+        Ok(())
+    }
+
+    /// The tile count every part laid shares, if they are all tiles of one count.
+    pub fn tile_count(&self) -> Option<u32> {
+        let first = (*self.tile_counts.first()?)?;
+        self.tile_counts
+            .iter()
+            .all(|&c| c == Some(first))
+            .then_some(first)
     }
 
     /// The tiles of `count` with a pixel no part covers: the ones to render again.
@@ -335,13 +384,6 @@ impl Canvas {
             ..Placement::whole(&self.film)
         }
     }
-}
-
-/// The tile count every tiled part shares, if there is one and no part is a crop.
-pub fn common_tile_count(parts: &[Part]) -> Option<u32> {
-    let mut counts = parts.iter().map(|p| p.tile.map(|t| t.count));
-    let first = counts.next()??;
-    counts.all(|c| c == Some(first)).then_some(first)
 }
 
 #[cfg(test)]

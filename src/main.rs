@@ -396,12 +396,16 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
     if let Some(path) = &args.output {
         OutputFormat::from_path(path).map_err(Failure::Usage)?;
     }
-    let mut parts = Vec::with_capacity(args.parts.len());
+    // One part in memory at a time besides the canvas.
+    let mut canvas: Option<Canvas> = None;
     for path in &args.parts {
         let bytes = std::fs::read(path)
             .map_err(|e| Failure::Run(format!("cannot read '{}': {e}", path.display())))?;
         let part = farm::read_part(&bytes, &path.display().to_string()).map_err(Failure::Usage)?;
-        parts.push(part);
+        canvas
+            .get_or_insert_with(|| Canvas::new(&part))
+            .add(&part)
+            .map_err(Failure::Usage)?;
     }
     let say_tiles = |tiles: Vec<String>| {
         let mut out = std::io::stdout().lock();
@@ -410,7 +414,7 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
             .try_for_each(|t| writeln!(out, "{t}"))
             .map_err(|e| Failure::Run(format!("cannot write the missing tiles: {e}")))
     };
-    if parts.is_empty() {
+    let Some(canvas) = canvas else {
         return match (args.missing, args.tiles) {
             // Every task of the array was lost: all of them are to run again.
             (true, Some(n)) => {
@@ -421,9 +425,8 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
                 "no parts to merge (with --missing, --tiles N lists all N tiles)".into(),
             )),
         };
-    }
-    let canvas = Canvas::assemble(&parts).map_err(Failure::Usage)?;
-    let count = args.tiles.or_else(|| farm::common_tile_count(&parts));
+    };
+    let count = args.tiles.or_else(|| canvas.tile_count());
     if args.missing {
         let n = count.ok_or_else(|| {
             Failure::Usage(
