@@ -410,7 +410,7 @@ pub struct CompareArgs {
     /// Also write a heat map of where the images differ: each pixel's largest channel
     /// difference, black where equal, then blue, red and yellow up to white at the largest
     /// difference found (the output line gives it in levels). The extension picks the
-    /// format: .png, .ppm or .hdr.
+    /// format: .png, .ppm, .hdr or .exr.
     #[arg(long, value_name = "FILE")]
     pub diff: Option<PathBuf>,
 }

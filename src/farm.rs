@@ -28,8 +28,9 @@ pub fn scene_hash(bytes: &[u8]) -> u64 {
 /// The line of a note that names the tile; every other line must agree between parts.
 const TILE_KEY: &str = "tile: ";
 
-/// The text of an EXR file's `p3trace` attribute: the program, the scene (name and hash of
-/// its file's bytes), and every setting that changes pixels. Threads, the structure and
+/// The text of an EXR file's `p3trace` attribute: the program, the scene (its file's name,
+/// not its path, which may differ between machines, and the hash of its bytes), and every
+/// setting that changes pixels. Threads, the structure and
 /// the ray mode are left out: they never change an image. A part rendered with `--tile`
 /// adds its tile as the last line.
 pub fn note(
@@ -47,6 +48,9 @@ pub fn note(
     let soft = shade
         .soft_light_size
         .map_or("off".to_string(), |s| format!("{s:?}"));
+    let file_name = std::path::Path::new(&scene.name)
+        .file_name()
+        .map_or(scene.name.clone(), |n| n.to_string_lossy().into_owned());
     let mut text = format!(
         "p3trace {} (commit {})\n\
          scene: {} (fnv1a64 {scene_hash:016x})\n\
@@ -60,7 +64,7 @@ pub fn note(
          skybox: {}",
         crate::machine::VERSION,
         crate::machine::COMMIT,
-        scene.name,
+        file_name,
         options.width,
         options.height,
         options.seed,

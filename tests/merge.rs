@@ -523,3 +523,41 @@ fn a_task_killed_mid_render_leaves_no_part_and_is_listed_missing() {
     let listed = merge(&["--missing", arg(&parts[0])]);
     assert_eq!(stdout(&listed), "1/2\n");
 }
+
+#[test]
+fn parts_of_one_scene_reached_by_different_paths_merge() {
+    let dir = scratch("merge_paths");
+    let parts = render_parts(&dir, &[], &["0/2"]);
+    // The other half from the project folder, by a relative path.
+    let other = dir.join("1of2.exr");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_p3trace"))
+        .current_dir(project_file(""))
+        .args([
+            "render",
+            "scenes/showcase.p3f",
+            "-q",
+            "--resolution",
+            "40x30",
+        ])
+        .args(["--tile", "1/2", "-o", arg(&other)])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let merged = dir.join("merged.exr");
+    run_ok(&["merge", arg(&parts[0]), arg(&other), "-o", arg(&merged)]);
+    let whole = dir.join("whole.exr");
+    let showcase = project_file("scenes/showcase.p3f");
+    run_ok(&[
+        "render",
+        arg(&showcase),
+        "-q",
+        "--resolution",
+        "40x30",
+        "-o",
+        arg(&whole),
+    ]);
+    assert_eq!(
+        std::fs::read(&merged).unwrap(),
+        std::fs::read(&whole).unwrap()
+    );
+}
