@@ -246,6 +246,11 @@ fn a_slurm_job_array_renders_the_one_machine_image_and_resumes_after_cancellatio
         !missing.is_empty() && missing.len() + left.len() == TILES as usize,
         "missing {missing:?} beside parts {left:?}"
     );
+    eprintln!(
+        "farm: cancelled with {} parts written; resubmitting {}",
+        left.len(),
+        missing.join(" ")
+    );
 
     // 3. Again: only the missing tiles are submitted, and the frame is complete.
     let (array, merge) = cluster.submit(&scene, &out, &flags);
