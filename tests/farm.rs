@@ -225,6 +225,14 @@ fn a_slurm_job_array_renders_the_one_machine_image_and_resumes_after_cancellatio
         );
         std::thread::sleep(Duration::from_millis(50));
     }
+    // Tasks are running as it is cancelled: scancel's SIGTERM reaches p3trace mid-render.
+    let running = cluster
+        .command("squeue")
+        .args(["-h", "-r", "-t", "RUNNING", "-j", &array])
+        .output()
+        .unwrap();
+    let running = String::from_utf8_lossy(&running.stdout).lines().count();
+    assert!(running > 0, "no task of the array was running");
     let cancel = cluster.command("scancel").arg(&array).output().unwrap();
     succeeded(&cancel, "scancel");
     // The merge depends on the array: it is cancelled with it.
@@ -247,7 +255,7 @@ fn a_slurm_job_array_renders_the_one_machine_image_and_resumes_after_cancellatio
         "missing {missing:?} beside parts {left:?}"
     );
     eprintln!(
-        "farm: cancelled with {} parts written; resubmitting {}",
+        "farm: cancelled with {} parts written and {running} tasks running; resubmitting {}",
         left.len(),
         missing.join(" ")
     );

@@ -44,7 +44,8 @@ start() {
     running "${entry#*:}" && die "${entry%%:*} already runs from $dir: stop first"
   done
   install_packages
-  rm -rf "$dir"
+  # Only what an earlier start made: the folder may be anywhere.
+  rm -rf "${dir:?}"/{etc,run,log,state,spool,munge}
   mkdir -p "$dir"/{etc,run,log,state,spool,munge}
   chmod 755 "$dir"
   # munged refuses to run as root with its key: it runs as munge, in its own folder.

@@ -35,7 +35,12 @@ missing=$("$P3TRACE" merge --missing --tiles "$tiles" "$parts"/tile-*-of-"$tiles
 sbatch_options=(--parsable --cpus-per-task="${P3TRACE_CPUS:-1}" ${P3TRACE_SBATCH:-})
 dependency=()
 if [ -n "$missing" ]; then
-  array=$(echo "$missing" | cut -d/ -f1 | paste -sd,)
+  # 0/8 1/8 2/8 5/8 -> 0-2,5: sbatch's array syntax, short however many tiles.
+  array=$(echo "$missing" | cut -d/ -f1 | awk '
+    NR == 1 { first = last = $1; next }
+    $1 == last + 1 { last = $1; next }
+    { printf "%s%s,", first, (last > first ? "-" last : ""); first = last = $1 }
+    END { printf "%s%s\n", first, (last > first ? "-" last : "") }')
   job=$(sbatch "${sbatch_options[@]}" --array="$array" \
     --export=ALL,P3TRACE_TILES="$tiles" --output="$parts/slurm-%A_%a.out" \
     "$here/render-array.sbatch" "$scene" "$parts" "$@")
