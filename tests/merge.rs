@@ -465,6 +465,24 @@ fn regions_on_the_command_line() {
     ]);
     let image = image::open(&png).unwrap();
     assert_eq!((image.width(), image.height()), (20, 15));
+    // The JSON says which pixels were rendered.
+    let json = dir.join("tile.json");
+    run_ok(&[
+        "render",
+        arg(&showcase),
+        "-q",
+        "--resolution",
+        "40x30",
+        "--tile",
+        "2/3",
+        "-o",
+        arg(&png),
+        "--json",
+        arg(&json),
+    ]);
+    let value: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(value["region"], serde_json::json!([0, 40, 20, 30]));
     for (flags, says) in [
         (&["--tile", "8/8"][..], "0 <= I < N"),
         (&["--tile", "0/31"][..], "at most 30 tiles"),
