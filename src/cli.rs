@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use p3trace::generate::{mountain, sphereflake};
 use p3trace::render::light::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
+use p3trace::render::region::TileIndex;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -33,6 +34,11 @@ pub enum Command {
     },
     /// Print how two images differ; exit 1 when too few pixels are within the tolerance.
     Compare(CompareArgs),
+    /// Assemble the EXR parts of a frame rendered in regions (render --tile, --crop or
+    /// --pixel-bounds -o PART.exr) into the image one `render` would have written, byte
+    /// for byte. Refuses (exit 2) parts of different scenes or settings, overlaps whose
+    /// pixels differ, and gaps, naming the tiles to render again.
+    Merge(MergeArgs),
     /// Time the primary, shadow and reflection rays of the benchmark protocol
     /// (../shared/bench/PROTOCOL.md) with 1 thread and with all, printing
     /// `ray-set api threads rays hits tsum mrays_per_s` lines that compare with Embree's.
@@ -165,10 +171,30 @@ pub struct RenderArgs {
     /// laid out by --seed (a file named random is `./random`).
     pub scene: PathBuf,
     /// Output image; the extension picks the format: .png (8-bit), .ppm (8-bit binary
-    /// P6) or .hdr (linear floating point). Default: the scene's name with .png, in the
-    /// current folder.
+    /// P6), .hdr (linear floating point) or .exr (OpenEXR, linear 32-bit float, with the
+    /// scene's hash and the settings that change pixels in its `p3trace` attribute: the
+    /// format of a farm's parts). Default: the scene's name with .png, in the current
+    /// folder.
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
+    /// Render only the pixels of this window, given as fractions of the image with y
+    /// from the top (pbrt's --cropwindow): columns ceil(X0 W) to ceil(X1 W), rows
+    /// ceil(Y0 H) to ceil(Y1 H), last ones excluded. An .exr output keeps the window's
+    /// place in the whole image (its data window); other formats hold the window alone.
+    #[arg(long, value_name = "X0,X1,Y0,Y1", value_parser = parse_crop,
+          group = "region")]
+    pub crop: Option<[f64; 4]>,
+    /// Render only pixels x0 <= x < x1, y0 <= y < y1, y from the top (pbrt's
+    /// --pixelbounds); written as for --crop.
+    #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds,
+          group = "region")]
+    pub pixel_bounds: Option<[u32; 4]>,
+    /// Render only tile I of N (0 <= I < N), for job arrays: the image cut into N
+    /// horizontal bands of whole rows from the top, rows floor(I H / N) to
+    /// floor((I + 1) H / N), so band heights differ by one row at most (N <= H). Write
+    /// it as .exr for `p3trace merge`, which names the missing tiles of a frame.
+    #[arg(long, value_name = "I/N", group = "region")]
+    pub tile: Option<TileIndex>,
     /// Image size, overriding the scene's `resolution` (for example 1024x768).
     #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
     pub resolution: Option<(u32, u32)>,
@@ -255,6 +281,26 @@ pub struct RenderArgs {
     pub json: Option<PathBuf>,
     #[command(flatten)]
     pub accel: AccelArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// The parts: EXR files written by `render --tile`, `--crop` or `--pixel-bounds`.
+    /// Parts may overlap where their pixels agree.
+    #[arg(value_name = "PART")]
+    pub parts: Vec<PathBuf>,
+    /// The merged image; the extension picks the format (.png, .ppm, .hdr or .exr), as
+    /// for `render -o`.
+    #[arg(short, long, value_name = "FILE", required_unless_present = "missing")]
+    pub output: Option<PathBuf>,
+    /// Write nothing: print the tiles I/N still to render, one a line (nothing when the
+    /// frame is complete), and exit 0. For a job array's resubmission.
+    #[arg(long, conflicts_with = "output")]
+    pub missing: bool,
+    /// The frame was split into N tiles: name missing tiles in tiles of N even when no
+    /// part was rendered with --tile N (or none exists yet, when --missing lists all N).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub tiles: Option<u32>,
 }
 
 #[derive(Args, Debug)]
@@ -364,7 +410,7 @@ pub struct CompareArgs {
     /// Also write a heat map of where the images differ: each pixel's largest channel
     /// difference, black where equal, then blue, red and yellow up to white at the largest
     /// difference found (the output line gives it in levels). The extension picks the
-    /// format: .png, .ppm or .hdr.
+    /// format: .png, .ppm, .hdr or .exr.
     #[arg(long, value_name = "FILE")]
     pub diff: Option<PathBuf>,
 }
@@ -415,6 +461,39 @@ fn parse_shutter(text: &str) -> Result<[f32; 2], String> {
     Ok([open, close])
 }
 
+/// Four comma-separated values of `T`, as `--crop` and `--pixel-bounds` take them.
+fn four<T: std::str::FromStr>(text: &str, what: &str) -> Result<[T; 4], String> {
+    let values: Vec<T> = text
+        .split(',')
+        .map(|v| v.trim().parse().ok())
+        .collect::<Option<_>>()
+        .ok_or_else(|| format!("'{text}' is not {what}"))?;
+    values
+        .try_into()
+        .map_err(|_| format!("'{text}' is not {what}"))
+}
+
+fn parse_crop(text: &str) -> Result<[f64; 4], String> {
+    let what = "X0,X1,Y0,Y1 with 0 <= X0 < X1 <= 1 and 0 <= Y0 < Y1 <= 1, such as 0,0.5,0,1";
+    let [x0, x1, y0, y1]: [f64; 4] = four(text, what)?;
+    let unit = 0.0..=1.0;
+    if [x0, x1, y0, y1].iter().all(|f| unit.contains(f)) && x0 < x1 && y0 < y1 {
+        Ok([x0, x1, y0, y1])
+    } else {
+        Err(format!("'{text}' is not {what}"))
+    }
+}
+
+fn parse_pixel_bounds(text: &str) -> Result<[u32; 4], String> {
+    let what = "x0,x1,y0,y1 with x0 < x1 and y0 < y1, such as 0,64,0,32";
+    let [x0, x1, y0, y1]: [u32; 4] = four(text, what)?;
+    if x0 < x1 && y0 < y1 {
+        Ok([x0, x1, y0, y1])
+    } else {
+        Err(format!("'{text}' is not {what}"))
+    }
+}
+
 fn parse_resolution(text: &str) -> Result<(u32, u32), String> {
     let max = p3trace::limits::MAX_RESOLUTION;
     let (w, h) = text
@@ -452,6 +531,19 @@ mod tests {
         assert!(parse_focal("0").is_err());
         assert!(parse_aperture("inf").is_err());
         assert_eq!(parse_light_size("2"), Ok(2.0));
+    }
+
+    #[test]
+    fn regions() {
+        assert_eq!(parse_crop("0,0.5, 0.25,1"), Ok([0.0, 0.5, 0.25, 1.0]));
+        assert!(parse_crop("0.5,0.5,0,1").is_err());
+        assert!(parse_crop("0,1.5,0,1").is_err());
+        assert!(parse_crop("0,1,0").is_err());
+        assert!(parse_crop("0,1,0,1,1").is_err());
+        assert!(parse_crop("nan,1,0,1").is_err());
+        assert_eq!(parse_pixel_bounds("0,64,8,16"), Ok([0, 64, 8, 16]));
+        assert!(parse_pixel_bounds("0,0,8,16").is_err());
+        assert!(parse_pixel_bounds("-1,3,8,16").is_err());
     }
 
     #[test]

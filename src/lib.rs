@@ -12,6 +12,7 @@
 //! - [`generate`] writes the project's own scenes as P3F text, and its skybox.
 //! - [`limits`] holds the sizes accepted from files and the command line.
 //! - [`compare`] measures how two images differ.
+//! - [`farm`] writes, reads and merges the parts of a frame split over many machines.
 //! - [`bench`] runs the trace-throughput protocol of `../shared/bench/PROTOCOL.md`.
 //! - [`machine`] says what the binary was built for and what the CPU offers.
 
@@ -22,6 +23,7 @@
 pub mod accel;
 pub mod bench;
 pub mod compare;
+pub mod farm;
 pub mod generate;
 pub mod intersect;
 pub mod limits;

@@ -12,15 +12,17 @@ use std::process::ExitCode;
 use clap::{CommandFactory, Parser};
 
 use cli::{
-    AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand,
+    AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand, MergeArgs,
     ModeChoice, ProfileChoice, RenderArgs, SceneOutput, UpAxis,
 };
 use p3trace::accel::{Accel, AccelKind, AccelOptions};
 use p3trace::accel::{BvhBuild, BvhWidth};
+use p3trace::farm::{self, Canvas};
 use p3trace::generate::{dragon, mountain, random, skybox, sphereflake};
 use p3trace::prim::PrimKind;
-use p3trace::render::film::OutputFormat;
+use p3trace::render::film::{OutputFormat, Placement};
 use p3trace::render::progress::Progress;
+use p3trace::render::region::Region;
 use p3trace::render::sampler::SampleGrid;
 use p3trace::render::shade::Profile;
 use p3trace::render::{self, RenderMode, RenderOptions, Sampling};
@@ -62,6 +64,7 @@ fn main() -> ExitCode {
         Command::Render(args) => run_render(&args),
         Command::Info { scene, accel } => run_info(&scene, &accel),
         Command::Compare(args) => run_compare(&args),
+        Command::Merge(args) => run_merge(&args),
         Command::Gen(command) => run_gen(command),
         Command::Bench(args) => run_bench(&args),
         Command::Completions { shell } => write_to_stdout(
@@ -150,12 +153,17 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
         ProfileChoice::Standard => Profile::Standard,
         ProfileChoice::Course => Profile::Course,
     };
-    let mut scene = if args.scene == Path::new("random") {
+    // The hash of the scene's text goes into an EXR file's note, for `merge` to check.
+    let (mut scene, scene_hash) = if args.scene == Path::new("random") {
         let text = random::random_scene(args.seed, None);
-        scene::parse_str_in(&text, "random", Path::new(""), profile.frame())
-            .map_err(|e| Failure::Run(e.to_string()))?
+        let scene = scene::parse_str_in(&text, "random", Path::new(""), profile.frame())
+            .map_err(|e| Failure::Run(e.to_string()))?;
+        (scene, farm::scene_hash(text.as_bytes()))
     } else {
-        load_scene(&args.scene, profile.frame())?
+        let scene = load_scene(&args.scene, profile.frame())?;
+        let bytes = std::fs::read(&args.scene)
+            .map_err(|e| Failure::Run(format!("cannot read '{}': {e}", args.scene.display())))?;
+        (scene, farm::scene_hash(&bytes))
     };
     if let Some(aperture) = args.aperture {
         scene.camera.aperture = aperture;
@@ -199,13 +207,37 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
         (false, false) => Progress::Lines,
     };
     options.accel = accel_options(&scene, &args.accel);
+    let (width, height) = (options.width, options.height);
+    options.region = match (args.crop, args.pixel_bounds, args.tile) {
+        (Some(crop), _, _) => Some(Region::crop(crop, width, height)),
+        (_, Some(bounds), _) => Some(Region::pixel_bounds(bounds, width, height)),
+        (_, _, Some(t)) => Some(Region::tile(t.index, t.count, width, height)),
+        _ => None,
+    }
+    .transpose()
+    .map_err(Failure::Usage)?;
     options.check_size().map_err(Failure::Usage)?;
 
     let report = render::render(&scene, &options).map_err(Failure::Run)?;
     for w in &report.warnings {
         eprintln!("p3trace: warning: {w}");
     }
-    report.film.write(&output).map_err(Failure::Run)?;
+    let region = options.region();
+    let placement = Placement {
+        image: (width, height),
+        origin: (region.x0, region.y0),
+        note: Some(farm::note(
+            &scene,
+            scene_hash,
+            &options,
+            report.skybox,
+            args.tile,
+        )),
+    };
+    report
+        .film
+        .write_placed(&output, &placement)
+        .map_err(Failure::Run)?;
     let say = human_output(args.json.as_deref());
     if args.stats {
         say(&format!(
@@ -220,8 +252,16 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     if !args.quiet {
         let seconds = report.elapsed.as_secs_f64();
         let rays = report.rays.total();
+        let part = if options.region.is_some() {
+            format!(
+                " (region {},{},{},{})",
+                region.x0, region.x1, region.y0, region.y1
+            )
+        } else {
+            String::new()
+        };
         say(&format!(
-            "{}: {}x{}, {}, {:.3} s, {} rays, {:.2} Mrays/s -> {}",
+            "{}: {}x{}{part}, {}, {:.3} s, {} rays, {:.2} Mrays/s -> {}",
             scene.name,
             options.width,
             options.height,
@@ -349,6 +389,80 @@ fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
         return Ok(ExitCode::from(1));
     }
     println!("match");
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
+    // Refuse a bad output name before reading the parts.
+    if let Some(path) = &args.output {
+        OutputFormat::from_path(path).map_err(Failure::Usage)?;
+    }
+    // One part in memory at a time besides the canvas.
+    let mut canvas: Option<Canvas> = None;
+    for path in &args.parts {
+        let bytes = std::fs::read(path)
+            .map_err(|e| Failure::Run(format!("cannot read '{}': {e}", path.display())))?;
+        let part = farm::read_part(&bytes, &path.display().to_string()).map_err(Failure::Usage)?;
+        canvas
+            .get_or_insert_with(|| Canvas::new(&part))
+            .add(&part)
+            .map_err(Failure::Usage)?;
+    }
+    let say_tiles = |tiles: Vec<String>| {
+        let mut out = std::io::stdout().lock();
+        tiles
+            .iter()
+            .try_for_each(|t| writeln!(out, "{t}"))
+            .map_err(|e| Failure::Run(format!("cannot write the missing tiles: {e}")))
+    };
+    let Some(canvas) = canvas else {
+        return match (args.missing, args.tiles) {
+            // Every task of the array was lost: all of them are to run again.
+            (true, Some(n)) => {
+                say_tiles((0..n).map(|i| format!("{i}/{n}")).collect())?;
+                Ok(ExitCode::SUCCESS)
+            }
+            _ => Err(Failure::Usage(
+                "no parts to merge (with --missing, --tiles N lists all N tiles)".into(),
+            )),
+        };
+    };
+    let count = args.tiles.or_else(|| canvas.tile_count());
+    if args.missing {
+        let n = count.ok_or_else(|| {
+            Failure::Usage(
+                "the parts are not all tiles of one count: give --tiles N to name the \
+                 missing tiles"
+                    .into(),
+            )
+        })?;
+        let missing = canvas.missing_tiles(n).map_err(Failure::Usage)?;
+        say_tiles(missing.iter().map(|t| t.to_string()).collect())?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    if let Some((pixels, gap)) = canvas.gaps() {
+        let mut message = format!(
+            "the parts leave {pixels} pixels uncovered, within columns {}..{} and rows {}..{}",
+            gap.x0, gap.x1, gap.y0, gap.y1
+        );
+        if let Some(n) = count {
+            let missing = canvas.missing_tiles(n).map_err(Failure::Usage)?;
+            let names: Vec<String> = missing.iter().map(|t| t.to_string()).collect();
+            message.push_str(&format!(
+                "; missing tiles: {} (`p3trace merge --missing` prints them one a line)",
+                names.join(" ")
+            ));
+        }
+        return Err(Failure::Usage(message));
+    }
+    let output = args
+        .output
+        .as_deref()
+        .ok_or_else(|| Failure::Usage("merge needs -o FILE".into()))?;
+    canvas
+        .film
+        .write_placed(output, &canvas.placement())
+        .map_err(Failure::Run)?;
     Ok(ExitCode::SUCCESS)
 }
 

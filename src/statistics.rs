@@ -44,6 +44,7 @@ pub fn render(
     let grid = options.sampling.grid();
     let rays = &report.rays;
     let seconds = report.elapsed.as_secs_f64();
+    let region = options.region();
     json!({
         "program": program,
         "cpu": cpu,
@@ -51,6 +52,7 @@ pub fn render(
         "scene": scene.name,
         "output": output.display().to_string(),
         "resolution": [options.width, options.height],
+        "region": [region.x0, region.x1, region.y0, region.y1],
         "samples_per_pixel": options.sampling.samples_per_pixel(),
         "sample_grid": [grid.columns, grid.rows],
         "mode": format!("{:?}", options.mode).to_lowercase(),

@@ -35,11 +35,19 @@ fn help_explains_every_flag() {
         "--profile",
         "--json",
         "--stats",
+        "--crop",
+        "--pixel-bounds",
+        "--tile",
+        ".exr",
     ] {
         assert!(help.contains(flag), "render --help does not mention {flag}");
     }
+    let merge = stdout(&p3trace(&["merge", "--help"]));
+    for flag in ["--output", "--missing", "--tiles"] {
+        assert!(merge.contains(flag), "merge --help does not mention {flag}");
+    }
     let top = stdout(&p3trace(&["--help"]));
-    for command in ["render", "info", "compare", "completions", "man"] {
+    for command in ["render", "info", "compare", "merge", "completions", "man"] {
         assert!(top.contains(command));
     }
 }

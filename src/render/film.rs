@@ -13,6 +13,8 @@ pub enum OutputFormat {
     Ppm,
     /// Radiance HDR: linear floating-point colour.
     Hdr,
+    /// OpenEXR: linear 32-bit float RGB, exact; a region keeps its place in the image.
+    Exr,
 }
 
 impl OutputFormat {
@@ -25,8 +27,9 @@ impl OutputFormat {
             Some("png") => Ok(OutputFormat::Png),
             Some("ppm") => Ok(OutputFormat::Ppm),
             Some("hdr") => Ok(OutputFormat::Hdr),
+            Some("exr") => Ok(OutputFormat::Exr),
             _ => Err(format!(
-                "cannot tell the image format of '{}': use .png, .ppm or .hdr",
+                "cannot tell the image format of '{}': use .png, .ppm, .hdr or .exr",
                 path.display()
             )),
         }
@@ -39,6 +42,32 @@ pub struct Film {
     pub width: u32,
     pub height: u32,
     pub pixels: Vec<Vec3>,
+}
+
+/// The name of the EXR header attribute that says what render made the pixels.
+pub const EXR_NOTE: &str = "p3trace";
+
+/// Where a film lies in the image it is part of, and what an EXR file says of the render
+/// that made it. PNG, PPM and HDR files hold the film's pixels alone.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Placement {
+    /// The whole image's width and height: the EXR display window.
+    pub image: (u32, u32),
+    /// The film's top-left pixel in the image: the corner of the EXR data window.
+    pub origin: (u32, u32),
+    /// The text of the [`EXR_NOTE`] attribute, if any.
+    pub note: Option<String>,
+}
+
+impl Placement {
+    /// A film that is the whole image, with no note.
+    pub fn whole(film: &Film) -> Self {
+        Placement {
+            image: (film.width, film.height),
+            origin: (0, 0),
+            note: None,
+        }
+    }
 }
 
 /// A channel value as a byte: `min(255, floor(255.99 x))`, no gamma.
@@ -70,11 +99,22 @@ impl Film {
     /// Writes the image in the format of `path`'s extension, atomically
     /// ([`crate::output::write_atomically`]): a failure never leaves a truncated image.
     pub fn write(&self, path: &Path) -> Result<(), String> {
-        let format = OutputFormat::from_path(path)?;
-        crate::output::write_atomically(path, |out| self.encode(out, format))
+        self.write_placed(path, &Placement::whole(self))
     }
 
-    fn encode(&self, out: &mut impl Write, format: OutputFormat) -> std::io::Result<()> {
+    /// Writes the image as [`Film::write`] does; an EXR file also gets `placement`'s
+    /// windows and note.
+    pub fn write_placed(&self, path: &Path, placement: &Placement) -> Result<(), String> {
+        let format = OutputFormat::from_path(path)?;
+        crate::output::write_atomically(path, |out| self.encode(out, format, placement))
+    }
+
+    fn encode(
+        &self,
+        out: &mut (impl Write + std::io::Seek),
+        format: OutputFormat,
+        placement: &Placement,
+    ) -> std::io::Result<()> {
         match format {
             OutputFormat::Png => image::ImageEncoder::write_image(
                 image::codecs::png::PngEncoder::new(out),
@@ -98,7 +138,49 @@ impl Film {
                     .encode(&pixels, self.width as usize, self.height as usize)
                     .map_err(std::io::Error::other)
             }
+            OutputFormat::Exr => self.encode_exr(out, placement),
         }
+    }
+
+    fn encode_exr(
+        &self,
+        out: &mut (impl Write + std::io::Seek),
+        placement: &Placement,
+    ) -> std::io::Result<()> {
+        use exr::meta::attribute::{AttributeValue, IntegerBounds, Text};
+        use exr::prelude::{
+            Encoding, Image, ImageAttributes, Layer, LayerAttributes, SpecificChannels, Vec2,
+            WritableImage,
+        };
+        let side = |n: u32| i32::try_from(n).map_err(std::io::Error::other);
+        let mut layer = LayerAttributes {
+            layer_position: Vec2(side(placement.origin.0)?, side(placement.origin.1)?),
+            ..LayerAttributes::default()
+        };
+        // One attribute only: the crate keeps attributes in a hash map, so that two would be
+        // written in an order that changes from run to run, and so would the file's bytes.
+        if let Some(note) = &placement.note {
+            layer.other.insert(
+                Text::from(EXR_NOTE),
+                AttributeValue::Text(Text::from_slice_unchecked(note.as_bytes())),
+            );
+        }
+        let (width, height) = (self.width as usize, self.height as usize);
+        let pixels = SpecificChannels::rgb(|at: Vec2<usize>| {
+            let p = self.pixels[at.y() * width + at.x()];
+            (p.x, p.y, p.z)
+        });
+        // Lossless, scan lines in increasing order: the same pixels give the same bytes.
+        let layer = Layer::new((width, height), layer, Encoding::SMALL_LOSSLESS, pixels);
+        let display = IntegerBounds::new(
+            (0, 0),
+            (placement.image.0 as usize, placement.image.1 as usize),
+        );
+        let image = Image::new(ImageAttributes::new(display), layer);
+        image
+            .write()
+            .to_buffered(out)
+            .map_err(std::io::Error::other)
     }
 }
 
@@ -129,6 +211,10 @@ mod tests {
         assert_eq!(
             OutputFormat::from_path(Path::new("a.hdr")),
             Ok(OutputFormat::Hdr)
+        );
+        assert_eq!(
+            OutputFormat::from_path(Path::new("a.exr")),
+            Ok(OutputFormat::Exr)
         );
         assert!(OutputFormat::from_path(Path::new("a.gif")).is_err());
         assert!(OutputFormat::from_path(Path::new("noext")).is_err());

@@ -5,6 +5,7 @@ pub mod camera;
 pub mod film;
 pub mod light;
 pub mod progress;
+pub mod region;
 pub mod sampler;
 pub mod shade;
 pub mod skybox;
@@ -24,6 +25,7 @@ use crate::scene::Scene;
 use camera::Camera;
 use film::Film;
 use progress::{Meter, Progress};
+use region::Region;
 use sampler::{dim, Sample, SampleGrid, SampleRng};
 use shade::{RayCounts, RayKind, ShadeOptions, Shader, ShadowPacket};
 use skybox::Skybox;
@@ -104,6 +106,8 @@ pub struct RenderOptions {
     /// The shutter interval `[open, close]`: each primary sample takes a time uniform in
     /// it (motion blur, P3F.md 6.5); all at `open` when they are equal.
     pub shutter: [f32; 2],
+    /// The pixels to render (a farm's part of the frame); `None` is the whole image.
+    pub region: Option<Region>,
 }
 
 /// The shutter of the course's code, used when a scene has moving spheres.
@@ -131,18 +135,35 @@ impl RenderOptions {
             } else {
                 [0.0; 2]
             },
+            region: None,
         }
     }
 
-    /// Refuses images too large to hold in memory, saying how much they would need.
+    /// The pixels to render: the region asked for, else the whole image.
+    pub fn region(&self) -> Region {
+        self.region
+            .unwrap_or_else(|| Region::full(self.width, self.height))
+    }
+
+    /// Refuses images too large to hold in memory, saying how much they would need, and
+    /// regions that reach outside the image.
     pub fn check_size(&self) -> Result<(), String> {
-        check_image_size(self.width, self.height)
+        check_image_size(self.width, self.height)?;
+        let r = self.region();
+        if r.x0 >= r.x1 || r.y0 >= r.y1 || r.x1 > self.width || r.y1 > self.height {
+            return Err(format!(
+                "the region {},{},{},{} is empty or outside the {}x{} image",
+                r.x0, r.x1, r.y0, r.y1, self.width, self.height
+            ));
+        }
+        Ok(())
     }
 }
 
 /// What a render produced besides the image.
 #[derive(Clone, Debug)]
 pub struct RenderReport {
+    /// The pixels of `options.region()` only.
     pub film: Film,
     /// Every ray traced, by kind.
     pub rays: RayCounts,
@@ -154,6 +175,8 @@ pub struct RenderReport {
     /// The structure's name and statistics lines.
     pub accel_name: String,
     pub accel_stats: Vec<String>,
+    /// Whether a skybox was drawn (the scene named one, it loaded, and it was wanted).
+    pub skybox: bool,
     pub warnings: Vec<String>,
 }
 
@@ -199,7 +222,8 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         .num_threads(options.threads.unwrap_or(0))
         .build()
         .map_err(|e| format!("cannot start the worker threads: {e}"))?;
-    let tiles = tiles(options.width, options.height);
+    let region = options.region();
+    let tiles = tiles(region, options.height);
     let progress = Meter::new(options.progress, tiles.len());
     let start = Instant::now();
     let rendered: Vec<(Tile, Vec<Vec3>, RayCounts)> = pool.install(|| {
@@ -216,7 +240,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
     progress.finish();
     let threads = pool.current_num_threads();
 
-    let mut film = Film::new(options.width, options.height);
+    let mut film = Film::new(region.width(), region.height());
     let mut rays = RayCounts::default();
     for (tile, pixels, tile_rays) in rendered {
         rays += tile_rays;
@@ -225,8 +249,8 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
                 tile.x + k as u32 % tile.width,
                 tile.y + k as u32 / tile.width,
             );
-            let row = options.height - 1 - y;
-            film.pixels[(row * options.width + x) as usize] = colour;
+            let row = options.height - 1 - y - region.y0;
+            film.pixels[(row * region.width() + x - region.x0) as usize] = colour;
         }
     }
     Ok(RenderReport {
@@ -237,6 +261,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         build_time,
         accel_name,
         accel_stats,
+        skybox: skybox.is_some(),
         warnings,
     })
 }
@@ -250,15 +275,19 @@ struct Tile {
     height: u32,
 }
 
-fn tiles(width: u32, height: u32) -> Vec<Tile> {
+/// The tiles covering `region` of an image `height` rows high; a region's tiles start at
+/// its own corner, so it costs its pixels only.
+fn tiles(region: Region, height: u32) -> Vec<Tile> {
+    // The region's rows counted from the bottom, as tiles count them.
+    let (bottom, top) = (height - region.y1, height - region.y0);
     let mut tiles = Vec::new();
-    for y in (0..height).step_by(TILE as usize) {
-        for x in (0..width).step_by(TILE as usize) {
+    for y in (bottom..top).step_by(TILE as usize) {
+        for x in (region.x0..region.x1).step_by(TILE as usize) {
             tiles.push(Tile {
                 x,
                 y,
-                width: TILE.min(width - x),
-                height: TILE.min(height - y),
+                width: TILE.min(region.x1 - x),
+                height: TILE.min(top - y),
             });
         }
     }
