@@ -226,13 +226,25 @@ fn a_slurm_job_array_renders_the_one_machine_image_and_resumes_after_cancellatio
         std::thread::sleep(Duration::from_millis(50));
     }
     // Tasks are running as it is cancelled: scancel's SIGTERM reaches p3trace mid-render.
-    let running = cluster
-        .command("squeue")
-        .args(["-h", "-r", "-t", "RUNNING", "-j", &array])
-        .output()
-        .unwrap();
-    let running = String::from_utf8_lossy(&running.stdout).lines().count();
-    assert!(running > 0, "no task of the array was running");
+    // Between one task's end and the next one's start none is, so wait for one.
+    let running_tasks = || {
+        let out = cluster
+            .command("squeue")
+            .args(["-h", "-r", "-t", "RUNNING", "-j", &array])
+            .output()
+            .unwrap();
+        String::from_utf8_lossy(&out.stdout).lines().count()
+    };
+    let start = Instant::now();
+    let mut running = running_tasks();
+    while running == 0 {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no task of the array was running"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+        running = running_tasks();
+    }
     let cancel = cluster.command("scancel").arg(&array).output().unwrap();
     succeeded(&cancel, "scancel");
     // The merge depends on the array: it is cancelled with it.
