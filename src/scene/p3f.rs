@@ -346,10 +346,15 @@ impl<'a> Parser<'a> {
     fn point(&mut self, what: &str) -> Result<Vec3> {
         let mut point = Vec3::ZERO;
         for axis in 0..3 {
-            let (_, token) = self.number_token(what)?;
-            // The text parses as an f32 within MAX_MAGNITUDE, so as an f64 too.
-            let x = token.text.parse::<f64>().unwrap_or_default();
-            point[axis] = (x - self.scene.origin[axis]) as f32;
+            let (x, token) = self.number_token(what)?;
+            let origin = self.scene.origin[axis];
+            point[axis] = if origin == 0.0 {
+                // The nearest float to the text, which the f64's rounding could miss.
+                x
+            } else {
+                // The text parses as an f32 within MAX_MAGNITUDE, so as an f64 too.
+                (token.text.parse::<f64>().unwrap_or_default() - origin) as f32
+            };
         }
         Ok(point)
     }
