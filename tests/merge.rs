@@ -69,6 +69,21 @@ fn run_ok(args: &[&str]) {
     assert!(out.status.success(), "{args:?}: {}", stderr(&out));
 }
 
+/// Renders `scene` at 40 x 30 with `flags` to `out`.
+fn render_small(scene: &Path, flags: &[&str], out: &Path) {
+    let mut args = vec![
+        "render",
+        arg(scene),
+        "-q",
+        "--resolution",
+        "40x30",
+        "-o",
+        arg(out),
+    ];
+    args.extend_from_slice(flags);
+    run_ok(&args);
+}
+
 /// Renders `scene` with `flags` whole (PNG and EXR), then as N tiles for every N of
 /// `counts`, merges each set both ways and checks the files equal the whole ones.
 fn merges_exactly(name: &str, scene: &str, flags: &[&str], counts: &[u32]) {
@@ -253,17 +268,11 @@ fn merge_refuses_parts_of_different_renders() {
     }
     // Another scene, at the same size.
     let other = dir.join("other.exr");
-    run_ok(&[
-        "render",
-        arg(&project_file("scenes/balls_low.p3f")),
-        "-q",
-        "--resolution",
-        "40x30",
-        "--tile",
-        "1/2",
-        "-o",
-        arg(&other),
-    ]);
+    render_small(
+        &project_file("scenes/balls_low.p3f"),
+        &["--tile", "1/2"],
+        &other,
+    );
     refused(
         &merge(&[arg(&base[0]), arg(&other), "-o", arg(&out)]),
         "scene: ",
@@ -305,15 +314,7 @@ fn merge_names_the_missing_tiles_and_a_rerun_completes_the_frame() {
         a
     });
     let whole = dir.join("whole.png");
-    run_ok(&[
-        "render",
-        arg(&project_file("scenes/showcase.p3f")),
-        "-q",
-        "--resolution",
-        "40x30",
-        "-o",
-        arg(&whole),
-    ]);
+    render_small(&project_file("scenes/showcase.p3f"), &[], &whole);
     assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&whole).unwrap());
     let listed = merge(&[
         "--missing",
@@ -333,17 +334,11 @@ fn merge_takes_agreeing_overlaps_and_refuses_disagreeing_ones() {
     let parts = render_parts(&dir, &[], &["0/2", "1/2"]);
     // A crop over both tiles, rendered by the same command: it agrees.
     let crop = dir.join("crop.exr");
-    run_ok(&[
-        "render",
-        arg(&project_file("scenes/showcase.p3f")),
-        "-q",
-        "--resolution",
-        "40x30",
-        "--pixel-bounds",
-        "5,30,10,20",
-        "-o",
-        arg(&crop),
-    ]);
+    render_small(
+        &project_file("scenes/showcase.p3f"),
+        &["--pixel-bounds", "5,30,10,20"],
+        &crop,
+    );
     run_ok(&[
         "merge",
         arg(&parts[0]),
@@ -413,17 +408,11 @@ fn merge_refuses_what_is_not_a_part() {
         "truncated.exr: ",
     );
     let png = dir.join("part.png");
-    run_ok(&[
-        "render",
-        arg(&project_file("scenes/showcase.p3f")),
-        "-q",
-        "--resolution",
-        "40x30",
-        "--tile",
-        "1/2",
-        "-o",
-        arg(&png),
-    ]);
+    render_small(
+        &project_file("scenes/showcase.p3f"),
+        &["--tile", "1/2"],
+        &png,
+    );
     refused(
         &merge(&[arg(&parts[0]), arg(&png), "-o", arg(&out)]),
         "not a readable OpenEXR file",
@@ -452,34 +441,12 @@ fn regions_on_the_command_line() {
     let dir = scratch("render_regions");
     let showcase = project_file("scenes/showcase.p3f");
     let png = dir.join("crop.png");
-    run_ok(&[
-        "render",
-        arg(&showcase),
-        "-q",
-        "--resolution",
-        "40x30",
-        "--crop",
-        "0,0.5,0.2,0.7",
-        "-o",
-        arg(&png),
-    ]);
+    render_small(&showcase, &["--crop", "0,0.5,0.2,0.7"], &png);
     let image = image::open(&png).unwrap();
     assert_eq!((image.width(), image.height()), (20, 15));
     // The JSON says which pixels were rendered.
     let json = dir.join("tile.json");
-    run_ok(&[
-        "render",
-        arg(&showcase),
-        "-q",
-        "--resolution",
-        "40x30",
-        "--tile",
-        "2/3",
-        "-o",
-        arg(&png),
-        "--json",
-        arg(&json),
-    ]);
+    render_small(&showcase, &["--tile", "2/3", "--json", arg(&json)], &png);
     let value: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(value["region"], serde_json::json!([0, 40, 20, 30]));
@@ -565,15 +532,7 @@ fn parts_of_one_scene_reached_by_different_paths_merge() {
     run_ok(&["merge", arg(&parts[0]), arg(&other), "-o", arg(&merged)]);
     let whole = dir.join("whole.exr");
     let showcase = project_file("scenes/showcase.p3f");
-    run_ok(&[
-        "render",
-        arg(&showcase),
-        "-q",
-        "--resolution",
-        "40x30",
-        "-o",
-        arg(&whole),
-    ]);
+    render_small(&showcase, &[], &whole);
     assert_eq!(
         std::fs::read(&merged).unwrap(),
         std::fs::read(&whole).unwrap()

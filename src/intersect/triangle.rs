@@ -208,6 +208,20 @@ impl Triangles {
     pub fn geometric_normal(&self, i: usize) -> Vec3 {
         self.e1.get(i).cross(self.e2.get(i)).normalize_or_zero()
     }
+
+    /// [`Shapes::normal`] at `(u, v)`, with the geometric normal made by `geometric` only
+    /// where it is needed, so that a caller holding `e1 x e2` need not take it again.
+    fn shading_normal(&self, i: usize, u: f32, v: f32, geometric: impl Fn() -> Vec3) -> Vec3 {
+        match self.shading[i] {
+            Self::FLAT => geometric(),
+            k => {
+                let n = self.vertex_normals[k as usize];
+                ((1.0 - u - v) * n[0] + u * n[1] + v * n[2])
+                    .try_normalize()
+                    .unwrap_or_else(geometric)
+            }
+        }
+    }
 }
 
 impl Shapes for Triangles {
@@ -277,15 +291,7 @@ impl Shapes for Triangles {
     /// The geometric normal of P3F.md section 2 (triangles have no inside), or for smooth
     /// triangles the vertex normals interpolated at `(u, v)`.
     fn normal(&self, i: usize, _p: Vec3, u: f32, v: f32, _time: f32) -> Vec3 {
-        match self.shading[i] {
-            Self::FLAT => self.geometric_normal(i),
-            k => {
-                let n = self.vertex_normals[k as usize];
-                ((1.0 - u - v) * n[0] + u * n[1] + v * n[2])
-                    .try_normalize()
-                    .unwrap_or_else(|| self.geometric_normal(i))
-            }
-        }
+        self.shading_normal(i, u, v, || self.geometric_normal(i))
     }
 
     /// `p0 + u e1 + v e2`, a point of the plane the test sees whatever `u` and `v` are. Its
@@ -294,11 +300,13 @@ impl Shapes for Triangles {
     /// `e2 . ((o - p0) x e1)` has the wrong sign; that product is off by `gamma(5)` of
     /// `|o - p0| |e1| |e2|`, which is `|o - p0| / sin(angle between e1 and e2)` along the
     /// normal, so a sliver's bound grows with its skew.
-    fn surface_point(&self, i: usize, ray: &Ray, _t: f32, u: f32, v: f32) -> SurfacePoint {
+    fn surface_point(&self, i: usize, _ray: &Ray, _t: f32, u: f32, v: f32) -> SurfacePoint {
         let (p0, e1, e2) = (self.p0.get(i), self.e1.get(i), self.e2.get(i));
         let (along1, along2) = (u * e1, v * e2);
         let point = p0 + along1 + along2;
-        let area = e1.cross(e2).length();
+        // One cross product for the bound's area and the normal.
+        let cross = e1.cross(e2);
+        let area = cross.length();
         let skew = if area > 0.0 {
             e1.length() * e2.length() / area
         } else {
@@ -308,7 +316,7 @@ impl Shapes for Triangles {
         SurfacePoint {
             point,
             error: gamma(7) * (p0.abs() + along1.abs() + along2.abs()) + Vec3::splat(product),
-            normal: self.normal(i, point, u, v, ray.time),
+            normal: self.shading_normal(i, u, v, || cross.normalize_or_zero()),
         }
     }
 }
