@@ -200,6 +200,7 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     options.mode = match args.mode {
         ModeChoice::Packet => RenderMode::Packet,
         ModeChoice::Scalar => RenderMode::Scalar,
+        ModeChoice::Stream => RenderMode::Stream,
     };
     options.progress = match (args.quiet, std::io::stderr().is_terminal()) {
         (true, _) => Progress::Hidden,

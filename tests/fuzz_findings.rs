@@ -129,7 +129,7 @@ fn far_plane_difference(kind: AccelKind, mode: RenderMode) -> Option<String> {
 /// `intersect::BoxRay::interval`).
 #[test]
 fn the_grid_finds_a_shadow_ray_from_1e9_away() {
-    for mode in [RenderMode::Scalar, RenderMode::Packet] {
+    for mode in RenderMode::ALL {
         let difference = far_plane_difference(AccelKind::Grid, mode);
         assert_eq!(difference, None, "{mode:?}");
     }
@@ -142,7 +142,7 @@ fn the_grid_finds_a_shadow_ray_from_1e9_away() {
 /// shares.
 #[test]
 fn the_bvh_finds_a_shadow_ray_from_1e9_away() {
-    for mode in [RenderMode::Scalar, RenderMode::Packet] {
+    for mode in RenderMode::ALL {
         let difference = far_plane_difference(AccelKind::Bvh, mode);
         assert_eq!(difference, None, "{mode:?}");
     }

@@ -33,7 +33,7 @@ fn a_region_renders_the_whole_frames_pixels_and_only_its_own() {
         o.region = region;
         o
     };
-    for mode in [RenderMode::Packet, RenderMode::Scalar] {
+    for mode in RenderMode::ALL {
         let full = render(&scene, &options(mode, None)).unwrap().film;
         let regions = [
             Region::pixel_bounds([3, 40, 5, 30], width, height).unwrap(),

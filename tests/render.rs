@@ -15,12 +15,12 @@ use p3trace::render::shade::{Profile, EPS};
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::{parse_file, parse_file_in, Scene};
 
-/// Packets change how rays travel, never what they find: every scene of `scenes/` (every
-/// primitive kind, the thin lens, moving spheres, glass) and the course scenes, with an
-/// odd size so that packets at the edges have idle lanes, give the scalar image, with
-/// either shading profile.
+/// Packets and streams change how rays travel, never what they find: every scene of
+/// `scenes/` (every primitive kind, the thin lens, moving spheres, glass) and the course
+/// scenes, with an odd size so that packets at the edges have idle lanes, give the scalar
+/// image in every mode, with either shading profile.
 #[test]
-fn packet_and_scalar_modes_give_the_same_image() {
+fn every_mode_gives_the_scalar_image() {
     let mut paths: Vec<_> = std::fs::read_dir(common::project_file("scenes"))
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -34,7 +34,7 @@ fn packet_and_scalar_modes_give_the_same_image() {
     for path in paths {
         let scene = parse_file(&path).unwrap();
         for profile in [Profile::Standard, Profile::Course] {
-            let [scalar, packet] = [RenderMode::Scalar, RenderMode::Packet].map(|mode| {
+            let [scalar, packet, stream] = RenderMode::ALL.map(|mode| {
                 render_scene(&scene, |o| {
                     (o.width, o.height) = (45, 31);
                     o.sampling = Sampling::Jittered(SampleGrid::square(2));
@@ -44,7 +44,14 @@ fn packet_and_scalar_modes_give_the_same_image() {
                 .to_rgb8()
             });
             let name = path.display();
-            assert!(scalar == packet, "{name} ({profile:?}): the modes differ");
+            assert!(
+                scalar == packet,
+                "{name} ({profile:?}): packet mode differs"
+            );
+            assert!(
+                scalar == stream,
+                "{name} ({profile:?}): stream mode differs"
+            );
         }
     }
 }

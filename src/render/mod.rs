@@ -9,6 +9,7 @@ pub mod region;
 pub mod sampler;
 pub mod shade;
 pub mod skybox;
+mod stream;
 
 use std::cell::RefCell;
 use std::time::{Duration, Instant};
@@ -85,6 +86,13 @@ pub enum RenderMode {
     /// Primary rays and their shadow rays as packets of eight (4 x 2 pixels); deeper rays
     /// one at a time. The image is the scalar one, byte for byte.
     Packet,
+    /// A tile's rays breadth first, depth by depth, every depth's rays and shadow rays
+    /// as packets of eight (`stream`). The image is the scalar one, byte for byte.
+    Stream,
+}
+
+impl RenderMode {
+    pub const ALL: [RenderMode; 3] = [RenderMode::Scalar, RenderMode::Packet, RenderMode::Stream];
 }
 
 #[derive(Clone, Debug)]
@@ -129,7 +137,7 @@ impl RenderOptions {
                 kind: scene.accel.unwrap_or(AccelKind::Bvh),
                 ..AccelOptions::default()
             },
-            mode: RenderMode::Packet,
+            mode: RenderMode::Stream,
             shutter: if !scene.geometry.moving_spheres.radius.is_empty() {
                 DEFAULT_SHUTTER
             } else {
@@ -226,31 +234,39 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
     let tiles = tiles(region, options.height);
     let progress = Meter::new(options.progress, tiles.len());
     let start = Instant::now();
-    let rendered: Vec<(Tile, Vec<Vec3>, RayCounts)> = pool.install(|| {
-        tiles
-            .par_iter()
-            .map(|&tile| {
-                let (pixels, rays) = render_tile(&shader, &camera, options, tile);
+    // Each tile writes its own block of this buffer: no allocation per tile.
+    let block = (TILE * TILE) as usize;
+    let mut tile_pixels = vec![Vec3::ZERO; tiles.len() * block];
+    let rays = pool.install(|| {
+        tile_pixels
+            .par_chunks_mut(block)
+            .zip(tiles.par_iter())
+            .map(|(pixels, &tile)| {
+                let rays = render_tile(&shader, &camera, options, tile, pixels);
                 progress.tile_done();
-                (tile, pixels, rays)
+                rays
             })
-            .collect()
+            .reduce(RayCounts::default, |mut total, rays| {
+                total += rays;
+                total
+            })
     });
     let elapsed = start.elapsed();
     progress.finish();
     let threads = pool.current_num_threads();
 
     let mut film = Film::new(region.width(), region.height());
-    let mut rays = RayCounts::default();
-    for (tile, pixels, tile_rays) in rendered {
-        rays += tile_rays;
-        for (k, colour) in pixels.into_iter().enumerate() {
+    for (tile, pixels) in tiles.iter().zip(tile_pixels.chunks(block)) {
+        for (k, colour) in pixels[..(tile.width * tile.height) as usize]
+            .iter()
+            .enumerate()
+        {
             let (x, y) = (
                 tile.x + k as u32 % tile.width,
                 tile.y + k as u32 / tile.width,
             );
             let row = options.height - 1 - y - region.y0;
-            film.pixels[(row * region.width() + x - region.x0) as usize] = colour;
+            film.pixels[(row * region.width() + x - region.x0) as usize] = *colour;
         }
     }
     Ok(RenderReport {
@@ -304,13 +320,15 @@ thread_local! {
 const PACKET_WIDTH: u32 = 4;
 const PACKET_HEIGHT: u32 = 2;
 
-/// The pixels of one tile, row by row from its bottom row, and the rays they took.
+/// Writes the pixels of one tile into `pixels`, row by row from its bottom row, and
+/// returns the rays they took.
 fn render_tile(
     shader: &Shader,
     camera: &Camera,
     options: &RenderOptions,
     tile: Tile,
-) -> (Vec<Vec3>, RayCounts) {
+    pixels: &mut [Vec3],
+) -> RayCounts {
     let mut rays = RayCounts::default();
     let grid = options.sampling.grid();
     let jittered = options.sampling != Sampling::Centre;
@@ -345,35 +363,51 @@ fn render_tile(
     SCRATCH.with_borrow_mut(|arena| {
         arena.reset();
         let sums = arena.alloc_slice_fill_copy((tile.width * tile.height) as usize, Vec3::ZERO);
-        let shadows = arena.alloc_slice_fill_default(shader.lights.len());
         trace_tile(
             shader,
             options,
             tile,
             grid,
             &sample_ray,
+            arena,
             sums,
-            shadows,
             &mut rays,
         );
         let samples = grid.cells() as f32;
-        (sums.iter().map(|&sum| sum / samples).collect(), rays)
+        for (pixel, sum) in pixels.iter_mut().zip(sums.iter()) {
+            *pixel = *sum / samples;
+        }
+        rays
     })
 }
 
 /// Adds the colour of every sample of every pixel of `tile` into `sums` (row by row from
-/// the tile's bottom row), one ray at a time or in packets as `options.mode` says.
-#[allow(clippy::too_many_arguments)] // the tile's setting and its two scratch buffers
+/// the tile's bottom row), one ray at a time, in packets or as streams as `options.mode`
+/// says; scratch space comes from `arena`.
+#[allow(clippy::too_many_arguments)] // the tile's setting, its scratch and its sums
 fn trace_tile(
     shader: &Shader,
     options: &RenderOptions,
     tile: Tile,
     grid: SampleGrid,
     sample_ray: &dyn Fn(u32, u32, u32, u32) -> (Ray, Sample),
+    arena: &Bump,
     sums: &mut [Vec3],
-    shadows: &mut [ShadowPacket],
     rays: &mut RayCounts,
 ) {
+    // Lane l of the packet whose block starts at (bx, by) is pixel (bx + l % 4, by + l / 4)
+    // of the tile, when that pixel is in the tile.
+    let lane_pixel = |bx: u32, by: u32, l: u32| {
+        let (x, y) = (bx + l % PACKET_WIDTH, by + l / PACKET_WIDTH);
+        (x < tile.width && y < tile.height).then_some((x, y))
+    };
+    let blocks = (0..tile.height)
+        .step_by(PACKET_HEIGHT as usize)
+        .flat_map(|by| {
+            (0..tile.width)
+                .step_by(PACKET_WIDTH as usize)
+                .map(move |bx| (bx, by))
+        });
     match options.mode {
         RenderMode::Scalar => {
             for (i, sum) in sums.iter_mut().enumerate() {
@@ -390,37 +424,49 @@ fn trace_tile(
             }
         }
         RenderMode::Packet => {
-            for by in (0..tile.height).step_by(PACKET_HEIGHT as usize) {
-                for bx in (0..tile.width).step_by(PACKET_WIDTH as usize) {
-                    // Lane l is pixel (bx + l % 4, by + l / 4) of the tile.
-                    let lane_pixel = |l: u32| {
-                        let (x, y) = (bx + l % PACKET_WIDTH, by + l / PACKET_WIDTH);
-                        (x < tile.width && y < tile.height).then_some((x, y))
-                    };
-                    let active = lane_mask(|l| lane_pixel(l as u32).is_some());
-                    for q in 0..grid.rows {
-                        for p in 0..grid.columns {
-                            let lanes: [(Ray, Sample); 8] = std::array::from_fn(|l| {
-                                let (x, y) = lane_pixel(l as u32).unwrap_or((bx, by));
-                                sample_ray(tile.x + x, tile.y + y, p, q)
-                            });
-                            let primary_rays = lanes.map(|(ray, _)| ray);
-                            let primary = RayPacket::new(&primary_rays).with_active(active);
-                            let colours = shader.trace_packet(
-                                &primary,
-                                &lanes.map(|(_, sample)| sample),
-                                shadows,
-                                rays,
-                            );
-                            for (l, colour) in colours.iter().enumerate() {
-                                if let Some((x, y)) = lane_pixel(l as u32) {
-                                    sums[(y * tile.width + x) as usize] += *colour;
-                                }
+            let shadows = arena.alloc_slice_fill_default::<ShadowPacket>(shader.lights.len());
+            for (bx, by) in blocks {
+                let active = lane_mask(|l| lane_pixel(bx, by, l as u32).is_some());
+                for q in 0..grid.rows {
+                    for p in 0..grid.columns {
+                        let lanes: [(Ray, Sample); 8] = std::array::from_fn(|l| {
+                            let (x, y) = lane_pixel(bx, by, l as u32).unwrap_or((bx, by));
+                            sample_ray(tile.x + x, tile.y + y, p, q)
+                        });
+                        let primary_rays = lanes.map(|(ray, _)| ray);
+                        let primary = RayPacket::new(&primary_rays).with_active(active);
+                        let colours = shader.trace_packet(
+                            &primary,
+                            &lanes.map(|(_, sample)| sample),
+                            shadows,
+                            rays,
+                        );
+                        for (l, colour) in colours.iter().enumerate() {
+                            if let Some((x, y)) = lane_pixel(bx, by, l as u32) {
+                                sums[(y * tile.width + x) as usize] += *colour;
                             }
                         }
                     }
                 }
             }
+        }
+        RenderMode::Stream => {
+            // The primary samples in the packets' order: a block's pixels, sample by sample.
+            let samples = (tile.width * tile.height * grid.cells()) as usize;
+            let mut primary = stream::Queue::with_capacity_in(samples, arena);
+            for (bx, by) in blocks {
+                for q in 0..grid.rows {
+                    for p in 0..grid.columns {
+                        for l in 0..PACKET_WIDTH * PACKET_HEIGHT {
+                            if let Some((x, y)) = lane_pixel(bx, by, l) {
+                                let (ray, sample) = sample_ray(tile.x + x, tile.y + y, p, q);
+                                primary.push_primary(ray, sample, y * tile.width + x);
+                            }
+                        }
+                    }
+                }
+            }
+            stream::trace(shader, arena, primary, sums, rays);
         }
     }
 }

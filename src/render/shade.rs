@@ -294,29 +294,61 @@ impl<'a> Shader<'a> {
         rays: &mut RayCounts,
         shadow_of: &mut impl FnMut(usize) -> Option<(ShadowRay, bool)>,
     ) -> Vec3 {
-        let Surface { nf, inside, .. } = *surface;
-        let material = &self.scene.materials[self.tracer.geometry.material(hit.prim) as usize];
-
-        let mut colour = self.local(ray, nf, material, rays, shadow_of);
+        let material = self.material(hit);
+        let mut colour = self.local(ray, surface.nf, material, rays, shadow_of);
         if depth >= self.options.max_depth {
             return colour.clamp(Vec3::ZERO, Vec3::ONE);
         }
-        let mut reflect = || {
-            let reflected = sample.spawn(0);
+        for child in self
+            .spawn(ray, sample, surface, material, ior_here)
+            .into_iter()
+            .flatten()
+        {
+            let seen = self.trace(
+                &child.ray,
+                child.kind,
+                &child.sample,
+                depth + 1,
+                child.ior,
+                rays,
+            );
+            colour += child.weight * seen;
+        }
+        colour.clamp(Vec3::ZERO, Vec3::ONE)
+    }
+
+    /// The material of the primitive `hit` met.
+    pub(super) fn material(&self, hit: &Hit) -> &Material {
+        &self.scene.materials[self.tracer.geometry.material(hit.prim) as usize]
+    }
+
+    /// The rays a hit on `surface` spawns, arrived along `ray` in a medium of index
+    /// `ior_here`: the reflected one, then the transmitted one, the order in which their
+    /// colours add to the hit's.
+    pub(super) fn spawn(
+        &self,
+        ray: &Ray,
+        sample: &Sample,
+        surface: &Surface,
+        material: &Material,
+        ior_here: f32,
+    ) -> [Option<Spawned>; 2] {
+        let Surface { nf, inside, .. } = *surface;
+        let reflect = |weight: Vec3| {
             let mirror = (ray.dir - 2.0 * ray.dir.dot(nf) * nf).normalize();
+            let sample = sample.spawn(0);
             let ray = Ray {
                 origin: surface.origin(nf),
-                dir: self.fuzz(mirror, nf, &reflected.rng),
+                dir: self.fuzz(mirror, nf, &sample.rng),
                 time: ray.time,
             };
-            self.trace(
-                &ray,
-                RayKind::Reflection,
-                &reflected,
-                depth + 1,
-                ior_here,
-                rays,
-            )
+            Some(Spawned {
+                ray,
+                kind: RayKind::Reflection,
+                sample,
+                ior: ior_here,
+                weight,
+            })
         };
         if material.transmittance > 0.0 {
             let ior_next = if inside { 1.0 } else { material.ior };
@@ -325,43 +357,41 @@ impl<'a> Shader<'a> {
             let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
             if sin2_t > 1.0 {
                 // Total internal reflection: Kr = 1 and no transmitted ray.
-                colour += material.specular * reflect();
-            } else {
-                let cos_t = (1.0 - sin2_t).sqrt();
-                let kr = if self.options.schlick {
-                    schlick(ior_here, ior_next, cos_i, cos_t)
-                } else {
-                    fresnel(ior_here, ior_next, cos_i, cos_t)
-                };
-                if kr > 0.0 {
-                    colour += kr * material.specular * reflect();
-                }
-                if kr < 1.0 {
-                    let transmitted = Ray {
-                        origin: surface.origin(-nf),
-                        dir: (eta * ray.dir + (eta * cos_i - cos_t) * nf).normalize(),
-                        time: ray.time,
-                    };
-                    let seen = self.trace(
-                        &transmitted,
-                        RayKind::Refraction,
-                        &sample.spawn(1),
-                        depth + 1,
-                        ior_next,
-                        rays,
-                    );
-                    colour += (1.0 - kr) * material.diffuse * seen;
-                }
+                return [reflect(material.specular), None];
             }
+            let cos_t = (1.0 - sin2_t).sqrt();
+            let kr = if self.options.schlick {
+                schlick(ior_here, ior_next, cos_i, cos_t)
+            } else {
+                fresnel(ior_here, ior_next, cos_i, cos_t)
+            };
+            let reflected = if kr > 0.0 {
+                reflect(kr * material.specular)
+            } else {
+                None
+            };
+            let transmitted = (kr < 1.0).then(|| Spawned {
+                ray: Ray {
+                    origin: surface.origin(-nf),
+                    dir: (eta * ray.dir + (eta * cos_i - cos_t) * nf).normalize(),
+                    time: ray.time,
+                },
+                kind: RayKind::Refraction,
+                sample: sample.spawn(1),
+                ior: ior_next,
+                weight: (1.0 - kr) * material.diffuse,
+            });
+            [reflected, transmitted]
         } else if material.ks > 0.0 {
-            colour += material.ks * material.specular * reflect();
+            [reflect(material.ks * material.specular), None]
+        } else {
+            [None, None]
         }
-        colour.clamp(Vec3::ZERO, Vec3::ONE)
     }
 
     /// The hit point and the normal facing the ray: the point recomputed on the surface
     /// with its error bound, or with the `course` profile the point along the ray.
-    fn surface(&self, ray: &Ray, hit: &Hit) -> Surface {
+    pub(super) fn surface(&self, ray: &Ray, hit: &Hit) -> Surface {
         let geometry = &self.tracer.geometry;
         let (p, normal, error) = match self.options.profile {
             Profile::Standard => {
@@ -407,7 +437,7 @@ impl<'a> Shader<'a> {
     /// Blinn-Phong over the lights that face the surface (normal `nf` facing the ray) and
     /// are not shadowed, with each light's shadow ray from `shadow_of` as in
     /// [`Shader::shade`].
-    fn local(
+    pub(super) fn local(
         &self,
         ray: &Ray,
         nf: Vec3,
@@ -438,7 +468,7 @@ impl<'a> Shader<'a> {
     // Inlined into both paths: out of line, the scalar render ran 0.7% more instructions
     // than with the ray built inside the lights' loop (callgrind, balls_low).
     #[inline(always)]
-    fn shadow_ray(
+    pub(super) fn shadow_ray(
         &self,
         index: usize,
         sample: &Sample,
@@ -462,7 +492,7 @@ impl<'a> Shader<'a> {
     }
 
     /// What a ray of `depth` along `dir` that hits nothing sees.
-    fn background(&self, dir: Vec3, depth: u32) -> Vec3 {
+    pub(super) fn background(&self, dir: Vec3, depth: u32) -> Vec3 {
         let colour = match self.skybox {
             Some(sky) => sky.lookup(dir),
             None => self.scene.background,
@@ -473,10 +503,10 @@ impl<'a> Shader<'a> {
 
 /// Where a ray met a surface.
 #[derive(Clone, Copy, Debug)]
-struct Surface {
+pub(super) struct Surface {
     p: Vec3,
     /// The unit normal turned to face the ray.
-    nf: Vec3,
+    pub nf: Vec3,
     /// The ray arrived from inside the surface.
     inside: bool,
     /// The bound of `p`'s error on each axis; `None` with the `course` profile, whose rays
@@ -494,14 +524,26 @@ impl Surface {
     }
 }
 
+/// A ray spawned at a hit, and how its colour adds to the hit's.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Spawned {
+    pub ray: Ray,
+    pub kind: RayKind,
+    pub sample: Sample,
+    /// The index of the medium the ray travels in.
+    pub ior: f32,
+    /// The factor of the colour it brings back in its hit's colour.
+    pub weight: Vec3,
+}
+
 /// A shadow ray from a hit point to a point of a light, and the light that arrives along
 /// it when nothing is in the way.
 #[derive(Clone, Copy, Debug)]
-struct ShadowRay {
-    ray: Ray,
+pub(super) struct ShadowRay {
+    pub ray: Ray,
     /// The light's distance along `ray`.
-    distance: f32,
-    colour: Vec3,
+    pub distance: f32,
+    pub colour: Vec3,
 }
 
 /// One light's shadow rays from the eight lanes of a packet, built once by

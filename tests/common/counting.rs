@@ -1,6 +1,8 @@
-//! A global allocator that counts the heap held now and at its peak, for the tests that
-//! measure memory (`huge_scene.rs`, `huge_mesh.rs`). Each of those files holds one test,
-//! so that nothing else allocates meanwhile.
+//! A global allocator that counts the heap held now and at its peak, and the calls that
+//! asked for memory, for the tests that measure memory (`huge_scene.rs`, `huge_mesh.rs`,
+//! `tile_allocations.rs`). Each of those files holds one test, so that nothing else
+//! allocates meanwhile.
+#![allow(dead_code)] // each test file uses part of it
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -13,8 +15,10 @@ pub struct Counting;
 
 static HELD: AtomicUsize = AtomicUsize::new(0);
 static PEAK: AtomicUsize = AtomicUsize::new(0);
+static CALLS: AtomicUsize = AtomicUsize::new(0);
 
 fn grew(bytes: usize) {
+    CALLS.fetch_add(1, Ordering::Relaxed);
     let now = HELD.fetch_add(bytes, Ordering::Relaxed) + bytes;
     PEAK.fetch_max(now, Ordering::Relaxed);
 }
@@ -42,6 +46,11 @@ unsafe impl GlobalAlloc for Counting {
         }
         p
     }
+}
+
+/// How many times memory was asked for (allocations and reallocations) so far.
+pub fn calls() -> usize {
+    CALLS.load(Ordering::Relaxed)
 }
 
 /// Starts a measurement: the bytes held now, from which [`peak_since`] counts.
