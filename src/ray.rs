@@ -85,6 +85,14 @@ impl<'r> RayPacket<'r> {
         RayPacket { t_max, ..self }
     }
 
+    /// The lanes whose ray [`Ray::is_traceable`] (its 8-lane twin), as a bit mask.
+    pub fn traceable(&self) -> u8 {
+        let finite = |v: Vec3x8| v.x.is_finite() & v.y.is_finite() & v.z.is_finite();
+        let zero = F32x8::splat(0.0);
+        let dir_zero = self.dir.x.eq(zero) & self.dir.y.eq(zero) & self.dir.z.eq(zero);
+        (finite(self.origin) & finite(self.dir) & !dir_zero).bitmask()
+    }
+
     /// Each lane's `1 / dir`, as the single-ray routines take it.
     pub fn inv_dir_lanes(&self) -> [Vec3; 8] {
         std::array::from_fn(|k| self.inv_dir.lane(k))

@@ -347,6 +347,16 @@ proptest! {
         }
     }
 
+    /// `RayPacket::traceable` answers each lane as `Ray::is_traceable`, odd rays included.
+    #[test]
+    fn traceable_lanes_equal_scalar(p in packet()) {
+        let (packet, ..) = p.soa();
+        let lanes = packet.traceable();
+        for (k, ray) in p.rays.iter().enumerate() {
+            prop_assert_eq!(lanes >> k & 1 == 1, ray.is_traceable(), "lane {}: {:?}", k, ray);
+        }
+    }
+
     /// The padding of each pack misses every ray: a pack with no real primitive never hits.
     #[test]
     fn padding_is_inert(ray in ray(), (t_min, t_max) in interval()) {

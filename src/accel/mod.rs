@@ -153,11 +153,6 @@ impl Accel {
     }
 }
 
-/// The lanes whose ray [`Ray::is_traceable`], as a bit mask.
-fn traceable(rays: &[Ray; 8]) -> u8 {
-    lane_mask(|k| rays[k].is_traceable())
-}
-
 /// Answers ray queries for one scene: the accelerator for bounded primitives, planes apart.
 pub struct Tracer<'s> {
     pub geometry: &'s Geometry,
@@ -220,7 +215,7 @@ impl<'s> Tracer<'s> {
     /// the other lanes. The same hits as [`Tracer::closest`] gives each ray; the 8-wide
     /// BVH and the grid trace them as one packet.
     pub fn closest_packet(&self, packet: &RayPacket) -> [Option<Hit>; 8] {
-        let active = packet.active & traceable(packet.rays);
+        let active = packet.active & packet.traceable();
         if active != packet.active {
             return self.closest_packet(&packet.with_active(active));
         }
@@ -251,7 +246,7 @@ impl<'s> Tracer<'s> {
     /// and the grid.
     pub fn occluded_packet(&self, packet: &RayPacket) -> u8 {
         let (rays, t_min, t_max) = (packet.rays, packet.t_min, &packet.t_max);
-        let active = packet.active & traceable(rays);
+        let active = packet.active & packet.traceable();
         let by_plane = lane_mask(|k| {
             active & (1 << k) != 0
                 && self
