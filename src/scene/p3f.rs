@@ -313,8 +313,27 @@ impl<'a> Parser<'a> {
     /// A number and its token.
     fn number_token(&mut self, what: &str) -> Result<(f32, Token<'a>)> {
         let token = self.token(what)?;
-        match token.text.parse::<f32>() {
-            Ok(x) if x.abs() <= MAX_MAGNITUDE => Ok((x, token)),
+        let x = self.checked(what, token, token.text.parse::<f32>())?;
+        Ok((x, token))
+    }
+
+    /// A number in double precision, accepted as [`Parser::number`] accepts its f32.
+    fn number_f64(&mut self, what: &str) -> Result<f64> {
+        let token = self.token(what)?;
+        let x = token.text.parse::<f64>();
+        self.checked(what, token, x.clone().map(|x| x as f32))?;
+        Ok(x.unwrap_or_default())
+    }
+
+    /// `parsed`, the f32 of `token`, if it is a finite number within [`MAX_MAGNITUDE`].
+    fn checked(
+        &self,
+        what: &str,
+        token: Token<'a>,
+        parsed: std::result::Result<f32, std::num::ParseFloatError>,
+    ) -> Result<f32> {
+        match parsed {
+            Ok(x) if x.abs() <= MAX_MAGNITUDE => Ok(x),
             Ok(x) if x.is_finite() => Err(self.error_token(
                 token,
                 format!(
@@ -346,14 +365,12 @@ impl<'a> Parser<'a> {
     fn point(&mut self, what: &str) -> Result<Vec3> {
         let mut point = Vec3::ZERO;
         for axis in 0..3 {
-            let (x, token) = self.number_token(what)?;
             let origin = self.scene.origin[axis];
             point[axis] = if origin == 0.0 {
-                // The nearest float to the text, which the f64's rounding could miss.
-                x
+                // The nearest float to the text, which rounding its f64 could miss.
+                self.number(what)?
             } else {
-                // The text parses as an f32 within MAX_MAGNITUDE, so as an f64 too.
-                (token.text.parse::<f64>().unwrap_or_default() - origin) as f32
+                (self.number_f64(what)? - origin) as f32
             };
         }
         Ok(point)
