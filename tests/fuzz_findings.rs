@@ -222,63 +222,60 @@ fn a_sphere_too_small_to_square_is_never_hit() {
     );
 }
 
-/// The scene of accel_agreement's crash-37bf537fbff3 (2026-11-30).
-fn crash_37bf_images(profile: p3trace::render::shade::Profile) -> [Vec<[u32; 3]>; 2] {
-    let text = "s -1000000000 5.5 5.5 5.5\nbox 5.5 5.5 5.5 5.5 5.5 5.5\n\
-                s -1000000000 1000000000 1000000000 5.5\ns 5.5 5.5 -6 6\n\
-                l 6 6 6 5.5 5.5 5.5\ns 8 8 8 1000000000\n";
-    let camera = p3trace::scene::CameraSpec {
-        from: Vec3::new(1e9, 1e9, 8.0),
-        at: Vec3::splat(8.0),
-        up: Vec3::new(8.0, -574872600.0, 8.0),
-        angle: 68.0,
-        aperture: 2.0,
-        ..Default::default()
-    };
-    fuzz_images(text, camera, profile)
+/// A scene that accel_agreement found: its text and its camera (aperture 2).
+struct Finding {
+    text: &'static str,
+    from: Vec3,
+    at: Vec3,
+    up: Vec3,
+    angle: f32,
 }
 
-/// The scene of accel_agreement's crash-975e0caabb90 (2026-11-30), of the same kind.
-fn crash_975e_images(profile: p3trace::render::shade::Profile) -> [Vec<[u32; 3]>; 2] {
-    let text = "s -1000000000 5.5 5.5 5.5\nbox 5.5 5.5 5.5 5.5 5.5 5.5\n\
-                s -1000000000 1000000000 1000000000 5.5\ns 5.5 5.5 -6 6\n\
-                l 6 6 6 5.5 5.5 5.5\ns 8 8 8 8\ns 8 8 8 8\ns 8 8 -8 1000000000\n";
-    let camera = p3trace::scene::CameraSpec {
-        from: Vec3::new(1e9, -1e9, 8.0),
-        at: Vec3::splat(8.0),
-        up: Vec3::splat(-1e9),
-        angle: 78.0,
-        aperture: 2.0,
-        ..Default::default()
-    };
-    fuzz_images(text, camera, profile)
-}
+/// accel_agreement's crash-37bf537fbff3 (2026-11-30).
+const CRASH_37BF: Finding = Finding {
+    text: "s -1000000000 5.5 5.5 5.5\nbox 5.5 5.5 5.5 5.5 5.5 5.5\n\
+           s -1000000000 1000000000 1000000000 5.5\ns 5.5 5.5 -6 6\n\
+           l 6 6 6 5.5 5.5 5.5\ns 8 8 8 1000000000\n",
+    from: Vec3::new(1e9, 1e9, 8.0),
+    at: Vec3::splat(8.0),
+    up: Vec3::new(8.0, -574872600.0, 8.0),
+    angle: 68.0,
+};
 
-/// The scene of accel_agreement's crash-1defb376cfed (2026-11-30), of the same kind.
-fn crash_1def_images(profile: p3trace::render::shade::Profile) -> [Vec<[u32; 3]>; 2] {
-    let text = "s 0 0 -1000000000 1000000000\nl 7 7 7 7 7 7\ns 7 7 7 7\ns 7 7 7 7\n\
-                s 7 7 7 3.5\n";
-    let camera = p3trace::scene::CameraSpec {
-        from: Vec3::new(3.5, 3.5, -1e9),
-        at: Vec3::new(2.0, -1e9, -1e9),
-        up: Vec3::new(-1e9, -1e9, -0.5),
-        angle: 74.0,
-        aperture: 2.0,
-        ..Default::default()
-    };
-    fuzz_images(text, camera, profile)
-}
+/// accel_agreement's crash-975e0caabb90 (2026-11-30), of the same kind.
+const CRASH_975E: Finding = Finding {
+    text: "s -1000000000 5.5 5.5 5.5\nbox 5.5 5.5 5.5 5.5 5.5 5.5\n\
+           s -1000000000 1000000000 1000000000 5.5\ns 5.5 5.5 -6 6\n\
+           l 6 6 6 5.5 5.5 5.5\ns 8 8 8 8\ns 8 8 8 8\ns 8 8 -8 1000000000\n",
+    from: Vec3::new(1e9, -1e9, 8.0),
+    at: Vec3::splat(8.0),
+    up: Vec3::splat(-1e9),
+    angle: 78.0,
+};
+
+/// accel_agreement's crash-1defb376cfed (2026-11-30), of the same kind.
+const CRASH_1DEF: Finding = Finding {
+    text: "s 0 0 -1000000000 1000000000\nl 7 7 7 7 7 7\ns 7 7 7 7\ns 7 7 7 7\n\
+           s 7 7 7 3.5\n",
+    from: Vec3::new(3.5, 3.5, -1e9),
+    at: Vec3::new(2.0, -1e9, -1e9),
+    up: Vec3::new(-1e9, -1e9, -0.5),
+    angle: 74.0,
+};
 
 /// A scene of accel_agreement rendered as the fuzz target renders it: 8 x 6 pixels, one
 /// thread, depth 3, two jittered samples with every effect on, with shading `profile`,
 /// by brute force (scalar) and by the grid (packets).
-fn fuzz_images(
-    text: &str,
-    camera: p3trace::scene::CameraSpec,
-    profile: p3trace::render::shade::Profile,
-) -> [Vec<[u32; 3]>; 2] {
-    let mut scene = parse_text(text).unwrap();
-    scene.camera = camera;
+fn fuzz_images(finding: &Finding, profile: p3trace::render::shade::Profile) -> [Vec<[u32; 3]>; 2] {
+    let mut scene = parse_text(finding.text).unwrap();
+    scene.camera = p3trace::scene::CameraSpec {
+        from: finding.from,
+        at: finding.at,
+        up: finding.up,
+        angle: finding.angle,
+        aperture: 2.0,
+        ..Default::default()
+    };
     let mut options = RenderOptions::from_scene(&scene);
     (options.width, options.height) = (8, 6);
     options.threads = Some(1);
@@ -307,7 +304,7 @@ fn fuzz_images(
 /// and the grid; the course profile's case is open (below).
 #[test]
 fn crash_37bf_agrees_with_the_standard_profile() {
-    let [brute, grid] = crash_37bf_images(p3trace::render::shade::Profile::Standard);
+    let [brute, grid] = fuzz_images(&CRASH_37BF, p3trace::render::shade::Profile::Standard);
     assert!(brute == grid);
 }
 
@@ -322,7 +319,7 @@ fn crash_37bf_agrees_with_the_standard_profile() {
 #[test]
 #[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
 fn crash_37bf_agrees_with_the_course_profile() {
-    let [brute, grid] = crash_37bf_images(p3trace::render::shade::Profile::Course);
+    let [brute, grid] = fuzz_images(&CRASH_37BF, p3trace::render::shade::Profile::Course);
     assert!(brute == grid);
 }
 
@@ -331,14 +328,14 @@ fn crash_37bf_agrees_with_the_course_profile() {
 /// standard profile agrees.
 #[test]
 fn crash_975e_agrees_with_the_standard_profile() {
-    let [brute, grid] = crash_975e_images(p3trace::render::shade::Profile::Standard);
+    let [brute, grid] = fuzz_images(&CRASH_975E, p3trace::render::shade::Profile::Standard);
     assert!(brute == grid);
 }
 
 #[test]
 #[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
 fn crash_975e_agrees_with_the_course_profile() {
-    let [brute, grid] = crash_975e_images(p3trace::render::shade::Profile::Course);
+    let [brute, grid] = fuzz_images(&CRASH_975E, p3trace::render::shade::Profile::Course);
     assert!(brute == grid);
 }
 
@@ -350,13 +347,13 @@ fn crash_975e_agrees_with_the_course_profile() {
 #[test]
 #[ignore = "open finding: inside a sphere of radius 1e9, brute force and the grid differ"]
 fn crash_1def_agrees_with_the_standard_profile() {
-    let [brute, grid] = crash_1def_images(p3trace::render::shade::Profile::Standard);
+    let [brute, grid] = fuzz_images(&CRASH_1DEF, p3trace::render::shade::Profile::Standard);
     assert!(brute == grid);
 }
 
 #[test]
 #[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
 fn crash_1def_agrees_with_the_course_profile() {
-    let [brute, grid] = crash_1def_images(p3trace::render::shade::Profile::Course);
+    let [brute, grid] = fuzz_images(&CRASH_1DEF, p3trace::render::shade::Profile::Course);
     assert!(brute == grid);
 }
