@@ -91,14 +91,8 @@ impl Cluster {
     /// Polls squeue (not `sbatch --wait`, which polls at 2, 10 and 42 s) until `jobs` are
     /// gone.
     fn wait(&self, jobs: &[&str]) {
-        let start = Instant::now();
-        while jobs.iter().any(|j| self.queued(j) > 0) {
-            assert!(
-                start.elapsed() < Duration::from_secs(600),
-                "jobs {jobs:?} still queued after 10 minutes"
-            );
-            std::thread::sleep(Duration::from_millis(200));
-        }
+        let what = format!("jobs {jobs:?} to leave the queue");
+        poll(&what, 600, 200, || jobs.iter().all(|j| self.queued(j) == 0));
     }
 
     /// Every task of `job` as `scontrol` reports it: state and exit code.
@@ -128,6 +122,19 @@ impl Drop for Cluster {
 }
 
 /// Whether this machine can run the cluster: `Err` says why not.
+/// Checks `done` every `every_ms` milliseconds until it holds; fails the test, naming
+/// `what` it waited for, after `limit_s` seconds.
+fn poll(what: &str, limit_s: u64, every_ms: u64, mut done: impl FnMut() -> bool) {
+    let start = Instant::now();
+    while !done() {
+        assert!(
+            start.elapsed() < Duration::from_secs(limit_s),
+            "waited {limit_s} s for {what}"
+        );
+        std::thread::sleep(Duration::from_millis(every_ms));
+    }
+}
+
 fn can_run() -> Result<(), String> {
     let uid = Command::new("id")
         .arg("-u")
@@ -217,14 +224,9 @@ fn a_slurm_job_array_renders_the_one_machine_image_and_resumes_after_cancellatio
     let parts = PathBuf::from(format!("{}.parts", out.display()));
     let (array, merge) = cluster.submit(&scene, &out, &flags);
     let array = array.unwrap();
-    let start = Instant::now();
-    while !part_files(&parts).iter().any(|n| n.ends_with(".exr")) {
-        assert!(
-            start.elapsed() < Duration::from_secs(300),
-            "no part written"
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    poll("a part to be written", 300, 50, || {
+        part_files(&parts).iter().any(|n| n.ends_with(".exr"))
+    });
     // Tasks are running as it is cancelled: scancel's SIGTERM reaches p3trace mid-render.
     // Between one task's end and the next one's start none is, so wait for one.
     let running_tasks = || {
@@ -235,16 +237,11 @@ fn a_slurm_job_array_renders_the_one_machine_image_and_resumes_after_cancellatio
             .unwrap();
         String::from_utf8_lossy(&out.stdout).lines().count()
     };
-    let start = Instant::now();
-    let mut running = running_tasks();
-    while running == 0 {
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "no task of the array was running"
-        );
-        std::thread::sleep(Duration::from_millis(50));
+    let mut running = 0;
+    poll("a task of the array to run", 60, 50, || {
         running = running_tasks();
-    }
+        running > 0
+    });
     let cancel = cluster.command("scancel").arg(&array).output().unwrap();
     succeeded(&cancel, "scancel");
     // The merge depends on the array: it is cancelled with it.
