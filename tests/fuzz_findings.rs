@@ -263,6 +263,29 @@ const CRASH_1DEF: Finding = Finding {
     angle: 74.0,
 };
 
+/// accel_agreement's crash-156f529883bf (2026-11-30, over the stream renderer, 504091c).
+const CRASH_156F: Finding = Finding {
+    text: "p 3 0 -1000000000 -1000000000 -500000000 -1000000000 -1000000000 -1000000000 \
+           -1000000000 -1000000000\n\
+           box -1000000000 -1000000000 -1000000000 -1000000000 1000000000 -1000000000\n\
+           box -1000000000 -1000000000 -1000000000 -1000000000 1000000000 -1000000000\n\
+           p 3 0 -1000000000 -1000000000 -500000000 -1000000000 -1000000000 -1000000000 \
+           -1000000000 -1000000000\n\
+           p 3 0 -1000000000 -1000000000 -500000000 -1000000000 -1000000000 -1000000000 \
+           -1000000000 -1000000000\n\
+           p 3 0 -1000000000 -1000000000 -500000000 -1000000000 -1000000000 -1000000000 \
+           -1000000000 -1000000000\n\
+           p 3 0 -1000000000 -1000000000 -500000000 -1000000000 -1000000000 -1000000000 \
+           -1000000000 -1000000000\n\
+           l 3.5 3.5 3.5 -0.5 -1000000000 0\ns 0 0 3.5 3.5\nl -1000000000 3.5 3.5 6 3.5 3.5\n\
+           l 3.5 3.5 -1000000000 -1000000000 -1000000000 -1000000000\n\
+           box -1000000000 -1000000000 0 0 1000000000 1000000000\n",
+    from: Vec3::splat(-1e9),
+    at: Vec3::new(1e9, -1e9, 2.0),
+    up: Vec3::new(0.0, -1e9, -0.5),
+    angle: 78.0,
+};
+
 /// A scene of accel_agreement rendered as the fuzz target renders it: 8 x 6 pixels, one
 /// thread, depth 3, two jittered samples with every effect on, with shading `profile`,
 /// by brute force (scalar) and by the grid (packets).
@@ -355,5 +378,25 @@ fn crash_1def_agrees_with_the_standard_profile() {
 #[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
 fn crash_1def_agrees_with_the_course_profile() {
     let [brute, grid] = fuzz_images(&CRASH_1DEF, p3trace::render::shade::Profile::Course);
+    assert!(brute == grid);
+}
+
+/// crash-156f529883bf (2026-11-30, the 30-minute run over the stream renderer, 504091c,
+/// 2.5 minutes in): boxes and triangles with coordinates of 1e9, a sphere of radius 3.5,
+/// the camera 1.7e9 away. With the course profile brute force and the grid (packets)
+/// differ; with the standard profile they agree, as for crash-37bf537fbff3, the likely
+/// same open case. Not traced. The grid in stream mode differs from brute force too, and
+/// agrees with it under the standard profile (checked once by hand: the fuzz target stops
+/// at the first mode that differs).
+#[test]
+fn crash_156f_agrees_with_the_standard_profile() {
+    let [brute, grid] = fuzz_images(&CRASH_156F, p3trace::render::shade::Profile::Standard);
+    assert!(brute == grid);
+}
+
+#[test]
+#[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
+fn crash_156f_agrees_with_the_course_profile() {
+    let [brute, grid] = fuzz_images(&CRASH_156F, p3trace::render::shade::Profile::Course);
     assert!(brute == grid);
 }
