@@ -311,8 +311,8 @@ fn tiles(region: Region, height: u32) -> Vec<Tile> {
 }
 
 thread_local! {
-    /// Each worker's scratch memory, reset for every tile: the sample sums and the
-    /// packets' shadow answers never go through the global allocator.
+    /// Each worker's scratch memory, reset for every tile: the sample sums, the packets'
+    /// shadow answers and the streams' queues never go through the global allocator.
     static SCRATCH: RefCell<Bump> = RefCell::new(Bump::new());
 }
 

@@ -299,11 +299,7 @@ impl<'a> Shader<'a> {
         if depth >= self.options.max_depth {
             return colour.clamp(Vec3::ZERO, Vec3::ONE);
         }
-        for child in self
-            .spawn(ray, sample, surface, material, ior_here)
-            .into_iter()
-            .flatten()
-        {
+        self.spawn(ray, sample, surface, material, ior_here, |child| {
             let seen = self.trace(
                 &child.ray,
                 child.kind,
@@ -313,7 +309,7 @@ impl<'a> Shader<'a> {
                 rays,
             );
             colour += child.weight * seen;
-        }
+        });
         colour.clamp(Vec3::ZERO, Vec3::ONE)
     }
 
@@ -322,9 +318,11 @@ impl<'a> Shader<'a> {
         &self.scene.materials[self.tracer.geometry.material(hit.prim) as usize]
     }
 
-    /// The rays a hit on `surface` spawns, arrived along `ray` in a medium of index
-    /// `ior_here`: the reflected one, then the transmitted one, the order in which their
-    /// colours add to the hit's.
+    /// Gives `emit` the rays a hit on `surface` spawns, arrived along `ray` in a medium of
+    /// index `ior_here`: the reflected one, then the transmitted one, the order in which
+    /// their colours add to the hit's. A callback rather than a returned pair, which cost
+    /// the scalar path's tiles 2% more instructions on the dragon (callgrind).
+    #[inline(always)]
     pub(super) fn spawn(
         &self,
         ray: &Ray,
@@ -332,9 +330,10 @@ impl<'a> Shader<'a> {
         surface: &Surface,
         material: &Material,
         ior_here: f32,
-    ) -> [Option<Spawned>; 2] {
+        mut emit: impl FnMut(Spawned),
+    ) {
         let Surface { nf, inside, .. } = *surface;
-        let reflect = |weight: Vec3| {
+        let reflected = |weight: Vec3| {
             let mirror = (ray.dir - 2.0 * ray.dir.dot(nf) * nf).normalize();
             let sample = sample.spawn(0);
             let ray = Ray {
@@ -342,13 +341,13 @@ impl<'a> Shader<'a> {
                 dir: self.fuzz(mirror, nf, &sample.rng),
                 time: ray.time,
             };
-            Some(Spawned {
+            Spawned {
                 ray,
                 kind: RayKind::Reflection,
                 sample,
                 ior: ior_here,
                 weight,
-            })
+            }
         };
         if material.transmittance > 0.0 {
             let ior_next = if inside { 1.0 } else { material.ior };
@@ -357,7 +356,8 @@ impl<'a> Shader<'a> {
             let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
             if sin2_t > 1.0 {
                 // Total internal reflection: Kr = 1 and no transmitted ray.
-                return [reflect(material.specular), None];
+                emit(reflected(material.specular));
+                return;
             }
             let cos_t = (1.0 - sin2_t).sqrt();
             let kr = if self.options.schlick {
@@ -365,27 +365,24 @@ impl<'a> Shader<'a> {
             } else {
                 fresnel(ior_here, ior_next, cos_i, cos_t)
             };
-            let reflected = if kr > 0.0 {
-                reflect(kr * material.specular)
-            } else {
-                None
-            };
-            let transmitted = (kr < 1.0).then(|| Spawned {
-                ray: Ray {
-                    origin: surface.origin(-nf),
-                    dir: (eta * ray.dir + (eta * cos_i - cos_t) * nf).normalize(),
-                    time: ray.time,
-                },
-                kind: RayKind::Refraction,
-                sample: sample.spawn(1),
-                ior: ior_next,
-                weight: (1.0 - kr) * material.diffuse,
-            });
-            [reflected, transmitted]
+            if kr > 0.0 {
+                emit(reflected(kr * material.specular));
+            }
+            if kr < 1.0 {
+                emit(Spawned {
+                    ray: Ray {
+                        origin: surface.origin(-nf),
+                        dir: (eta * ray.dir + (eta * cos_i - cos_t) * nf).normalize(),
+                        time: ray.time,
+                    },
+                    kind: RayKind::Refraction,
+                    sample: sample.spawn(1),
+                    ior: ior_next,
+                    weight: (1.0 - kr) * material.diffuse,
+                });
+            }
         } else if material.ks > 0.0 {
-            [reflect(material.ks * material.specular), None]
-        } else {
-            [None, None]
+            emit(reflected(material.ks * material.specular));
         }
     }
 

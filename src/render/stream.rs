@@ -11,7 +11,7 @@ use bumpalo::Bump;
 use glam::Vec3;
 
 use super::sampler::Sample;
-use super::shade::{RayCounts, RayKind, Shader, ShadowRay, Spawned, Surface};
+use super::shade::{RayCounts, RayKind, Shader, ShadowRay, Surface};
 use crate::ray::{Ray, RayPacket};
 
 /// The rays of one depth, and what they bring back.
@@ -154,20 +154,10 @@ fn shade_depth<'a>(
         queue.hit.push(true);
         if depth < shader.options.max_depth {
             let sample = &queue.samples[i];
-            for child in shader.spawn(ray, sample, surface, material, queue.ior[i]) {
-                let Some(Spawned {
-                    ray,
-                    kind,
-                    sample,
-                    ior,
-                    weight,
-                }) = child
-                else {
-                    continue;
-                };
-                rays.add(kind, 1);
-                next.push(ray, sample, ior, i as u32, weight);
-            }
+            shader.spawn(ray, sample, surface, material, queue.ior[i], |child| {
+                rays.add(child.kind, 1);
+                next.push(child.ray, child.sample, child.ior, i as u32, child.weight);
+            });
         }
     }
     next
