@@ -303,6 +303,24 @@ const CRASH_6C89: Finding = Finding {
     angle: 78.0,
 };
 
+/// accel_agreement's crash-b88aacef2014 (2026-11-30, over the stream renderer, 504091c).
+const CRASH_B88A: Finding = Finding {
+    text: "box 5 0 0 -1000000000 -0.5 122306050\n\
+           ms 284099600 479791870 5.5 5.5 5.5 5.5 5.5 5.5 5.5\n\
+           s 5.5 5.5 5.5 5.5\n\
+           s 5.5 5.5 5.5 5.5\n\
+           ms 122306050 -866440700 -4 1000000000 -1000000000 -3 0 0 0\n\
+           s 5.5 5.5 5.5 5.5\n\
+           l 0 0 0 1000000000 -0.5 -1000000000\n\
+           ms 122306050 122306050 122306050 122306050 \
+           0.000000000000000000000000000000000000000037814 0 1000000000 -1000000000 \
+           -0.00000000000000000000000000005702072\n",
+    from: Vec3::new(1.7369657e-37, 0.0, 6.5),
+    at: Vec3::new(1e9, -0.5, -1e9),
+    up: Vec3::new(-1e9, 122306050.0, 122306050.0),
+    angle: 106.0,
+};
+
 /// A scene of accel_agreement rendered as the fuzz target renders it: 8 x 6 pixels, one
 /// thread, depth 3, two jittered samples with every effect on, with shading `profile`,
 /// by brute force (scalar) and by the grid (packets).
@@ -435,5 +453,17 @@ fn crash_6c89_agrees_with_the_standard_profile() {
 #[ignore = "open finding: with the course profile the structures and brute force differ"]
 fn crash_6c89_agrees_with_the_course_profile() {
     let [brute, grid] = fuzz_images(&CRASH_6C89, p3trace::render::shade::Profile::Course);
+    assert!(brute == grid);
+}
+
+/// Open, crash-b88aacef2014 (2026-11-30, the 31-minute run over the stream renderer): a
+/// box 1e9 long and 0.5 thin beside the camera, spheres of radius 5.5 and moving spheres
+/// with extreme values. The grid, in every mode, gives 3 of the 48 pixels otherwise than
+/// brute force and the BVH, already at depth 1 (traced by hand with every structure and
+/// mode side by side), with either profile. Not yet traced further.
+#[test]
+#[ignore = "open finding: the grid differs from brute force beside a box 1e9 long"]
+fn crash_b88a_agrees_with_the_standard_profile() {
+    let [brute, grid] = fuzz_images(&CRASH_B88A, p3trace::render::shade::Profile::Standard);
     assert!(brute == grid);
 }
