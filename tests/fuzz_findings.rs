@@ -4,6 +4,7 @@
 use glam::Vec3;
 use p3trace::accel::AccelKind;
 use p3trace::render::sampler::SampleGrid;
+use p3trace::render::shade::Profile;
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::p3f::parse_text;
 
@@ -321,10 +322,10 @@ const CRASH_B88A: Finding = Finding {
     angle: 106.0,
 };
 
-/// A scene of accel_agreement rendered as the fuzz target renders it: 8 x 6 pixels, one
-/// thread, depth 3, two jittered samples with every effect on, with shading `profile`,
-/// by brute force (scalar) and by the grid (packets).
-fn fuzz_images(finding: &Finding, profile: p3trace::render::shade::Profile) -> [Vec<[u32; 3]>; 2] {
+/// Renders a scene of accel_agreement as the fuzz target renders it (8 x 6 pixels, one
+/// thread, depth 3, two jittered samples with every effect on) with shading `profile`, by
+/// brute force (scalar) and by the grid (packets), and asserts that the images agree.
+fn assert_agrees(finding: &Finding, profile: Profile) {
     let mut scene = parse_text(finding.text).unwrap();
     scene.camera = p3trace::scene::CameraSpec {
         from: finding.from,
@@ -343,7 +344,7 @@ fn fuzz_images(finding: &Finding, profile: p3trace::render::shade::Profile) -> [
     options.shade.soft_light_size = Some(0.5);
     options.shade.roughness = 0.3;
     options.shutter = [0.0, 0.5];
-    [
+    let [brute, grid] = [
         (AccelKind::None, RenderMode::Scalar),
         (AccelKind::Grid, RenderMode::Packet),
     ]
@@ -354,16 +355,16 @@ fn fuzz_images(finding: &Finding, profile: p3trace::render::shade::Profile) -> [
         film.pixels
             .iter()
             .map(|p| p.to_array().map(f32::to_bits))
-            .collect()
-    })
+            .collect::<Vec<_>>()
+    });
+    assert!(brute == grid);
 }
 
 /// The standard profile gives one image of crash-37bf537fbff3's scene with brute force
 /// and the grid; the course profile's case is open (below).
 #[test]
 fn crash_37bf_agrees_with_the_standard_profile() {
-    let [brute, grid] = fuzz_images(&CRASH_37BF, p3trace::render::shade::Profile::Standard);
-    assert!(brute == grid);
+    assert_agrees(&CRASH_37BF, Profile::Standard);
 }
 
 /// Open, found by accel_agreement on 2026-11-30: a sphere of radius 1e9 seen from 1e9
@@ -377,8 +378,7 @@ fn crash_37bf_agrees_with_the_standard_profile() {
 #[test]
 #[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
 fn crash_37bf_agrees_with_the_course_profile() {
-    let [brute, grid] = fuzz_images(&CRASH_37BF, p3trace::render::shade::Profile::Course);
-    assert!(brute == grid);
+    assert_agrees(&CRASH_37BF, Profile::Course);
 }
 
 /// crash-975e0caabb90 (2026-11-30, over 1fadf91): another sphere of radius 1e9 seen from
@@ -386,15 +386,13 @@ fn crash_37bf_agrees_with_the_course_profile() {
 /// standard profile agrees.
 #[test]
 fn crash_975e_agrees_with_the_standard_profile() {
-    let [brute, grid] = fuzz_images(&CRASH_975E, p3trace::render::shade::Profile::Standard);
-    assert!(brute == grid);
+    assert_agrees(&CRASH_975E, Profile::Standard);
 }
 
 #[test]
 #[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
 fn crash_975e_agrees_with_the_course_profile() {
-    let [brute, grid] = fuzz_images(&CRASH_975E, p3trace::render::shade::Profile::Course);
-    assert!(brute == grid);
+    assert_agrees(&CRASH_975E, Profile::Course);
 }
 
 /// crash-1defb376cfed (2026-11-30, over 1fadf91, in the 30-minute run that went on past
@@ -405,15 +403,13 @@ fn crash_975e_agrees_with_the_course_profile() {
 #[test]
 #[ignore = "open finding: inside a sphere of radius 1e9, brute force and the grid differ"]
 fn crash_1def_agrees_with_the_standard_profile() {
-    let [brute, grid] = fuzz_images(&CRASH_1DEF, p3trace::render::shade::Profile::Standard);
-    assert!(brute == grid);
+    assert_agrees(&CRASH_1DEF, Profile::Standard);
 }
 
 #[test]
 #[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
 fn crash_1def_agrees_with_the_course_profile() {
-    let [brute, grid] = fuzz_images(&CRASH_1DEF, p3trace::render::shade::Profile::Course);
-    assert!(brute == grid);
+    assert_agrees(&CRASH_1DEF, Profile::Course);
 }
 
 /// crash-156f529883bf (2026-11-30, the 30-minute run over the stream renderer, 504091c,
@@ -425,15 +421,13 @@ fn crash_1def_agrees_with_the_course_profile() {
 /// at the first mode that differs).
 #[test]
 fn crash_156f_agrees_with_the_standard_profile() {
-    let [brute, grid] = fuzz_images(&CRASH_156F, p3trace::render::shade::Profile::Standard);
-    assert!(brute == grid);
+    assert_agrees(&CRASH_156F, Profile::Standard);
 }
 
 #[test]
 #[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
 fn crash_156f_agrees_with_the_course_profile() {
-    let [brute, grid] = fuzz_images(&CRASH_156F, p3trace::render::shade::Profile::Course);
-    assert!(brute == grid);
+    assert_agrees(&CRASH_156F, Profile::Course);
 }
 
 /// crash-6c89501116896 (2026-11-30, the same run, 8 minutes in): the camera at the centre
@@ -445,15 +439,13 @@ fn crash_156f_agrees_with_the_course_profile() {
 /// traced further.
 #[test]
 fn crash_6c89_agrees_with_the_standard_profile() {
-    let [brute, grid] = fuzz_images(&CRASH_6C89, p3trace::render::shade::Profile::Standard);
-    assert!(brute == grid);
+    assert_agrees(&CRASH_6C89, Profile::Standard);
 }
 
 #[test]
 #[ignore = "open finding: with the course profile the structures and brute force differ"]
 fn crash_6c89_agrees_with_the_course_profile() {
-    let [brute, grid] = fuzz_images(&CRASH_6C89, p3trace::render::shade::Profile::Course);
-    assert!(brute == grid);
+    assert_agrees(&CRASH_6C89, Profile::Course);
 }
 
 /// Open, crash-b88aacef2014 (2026-11-30, the 31-minute run over the stream renderer): a
@@ -474,6 +466,5 @@ fn crash_6c89_agrees_with_the_course_profile() {
 #[test]
 #[ignore = "open finding: the grid differs from brute force beside a box 1e9 long"]
 fn crash_b88a_agrees_with_the_standard_profile() {
-    let [brute, grid] = fuzz_images(&CRASH_B88A, p3trace::render::shade::Profile::Standard);
-    assert!(brute == grid);
+    assert_agrees(&CRASH_B88A, Profile::Standard);
 }

@@ -307,14 +307,8 @@ impl<'a> Parser<'a> {
     }
 
     fn number(&mut self, what: &str) -> Result<f32> {
-        Ok(self.number_token(what)?.0)
-    }
-
-    /// A number and its token.
-    fn number_token(&mut self, what: &str) -> Result<(f32, Token<'a>)> {
         let token = self.token(what)?;
-        let x = self.checked(what, token, token.text.parse::<f32>())?;
-        Ok((x, token))
+        self.checked(what, token, token.text.parse::<f32>())
     }
 
     /// A number in double precision, accepted as [`Parser::number`] accepts its f32.
