@@ -276,6 +276,7 @@ impl Vec3x8 {
     }
 
     /// Lane `i` as a `Vec3`.
+    #[inline]
     pub fn lane(self, i: usize) -> Vec3 {
         Vec3::new(
             self.x.to_array()[i],

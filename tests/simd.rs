@@ -114,6 +114,27 @@ fn packet() -> impl Strategy<Value = Packet> {
         })
 }
 
+/// Packets whose directions share lane 0's signs, as a tile's primary rays or one
+/// light's shadow rays mostly do: the packets a `RayRange` is made for.
+fn coherent_packet() -> impl Strategy<Value = Packet> {
+    packet().prop_map(|mut p| {
+        let signs = p.rays[0].dir;
+        for ray in &mut p.rays {
+            ray.dir = ray.dir.abs().copysign(signs);
+        }
+        p
+    })
+}
+
+/// Whether the directions of the lanes `lanes` agree in sign on every axis.
+fn same_signs(p: &Packet, lanes: u8) -> bool {
+    let mut signs = (0..8)
+        .filter(|k| lanes >> k & 1 == 1)
+        .map(|k| p.rays[k].dir.recip().cmpgt(Vec3::ZERO).bitmask());
+    let first = signs.next();
+    signs.all(|s| Some(s) == first)
+}
+
 impl Packet {
     fn soa(&self) -> (RayPacket<'_>, F32x8, F32x8, u8) {
         (
@@ -344,6 +365,51 @@ proptest! {
                 .filter(|_| active >> i & 1 == 1)
                 .and_then(|&(lo, hi)| box_ray.interval(lo, hi, t_min, t_max));
             same_interval("box intervals8", i, scalar, lanes);
+        }
+    }
+
+    /// A packet's `RayRange` (its traceable active lanes, as a traversal makes it) never
+    /// rejects a box that the box test lets one of those lanes into: the range may only
+    /// cull boxes every lane misses.
+    #[test]
+    fn ray_range_keeps_every_box_a_lane_enters(
+        p in coherent_packet(),
+        (lo, hi) in aabb().prop_filter("ordered corners", |(lo, hi)| lo.cmple(*hi).all()),
+    ) {
+        let (rays, _, t_max, active) = p.soa();
+        let lanes = active & rays.traceable();
+        let t_min = F32x8::splat(p.t_min[0]);
+        let box_rays = BoxRay8::new(&rays);
+        let entered = box_rays.interval(lo, hi, t_min, t_max).hit.bitmask() & lanes;
+        let Some(range) = box_rays.range(lanes) else {
+            // Only lanes of mixed signs, or none, have no range.
+            prop_assert!(lanes == 0 || !same_signs(&p, lanes));
+            return Ok(());
+        };
+        let largest = (0..8)
+            .filter(|k| lanes >> k & 1 == 1)
+            .fold(f32::NEG_INFINITY, |m, k| m.max(p.t_max[k]));
+        if entered != 0 {
+            prop_assert!(range.enters(lo, hi, p.t_min[0], largest), "lanes {entered:08b} enter");
+        }
+    }
+
+    /// `RayRange::enters8` answers each slot as `RayRange::enters`, padding and odd boxes included.
+    #[test]
+    fn ray_range_enters8_equals_scalar(
+        p in coherent_packet(),
+        boxes in prop::collection::vec(aabb(), 0..=8),
+        (t_min, t_max) in interval(),
+    ) {
+        let (rays, .., active) = p.soa();
+        let Some(range) = BoxRay8::new(&rays).range(active & rays.traceable()) else {
+            return Ok(());
+        };
+        let pack = BoxPack8::new(&boxes);
+        let lanes = range.enters8(&pack, t_min, t_max);
+        for k in 0..8 {
+            let (lo, hi) = boxes.get(k).copied().unwrap_or((BoxPack8::PAD, BoxPack8::PAD));
+            prop_assert_eq!(lanes >> k & 1 == 1, range.enters(lo, hi, t_min, t_max), "slot {}", k);
         }
     }
 

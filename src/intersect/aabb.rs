@@ -79,16 +79,10 @@ impl BoxPack8 {
         }
     }
 
-    /// Each slot's `(min, max)` corners.
+    /// Slot `k`'s `(min, max)` corners.
     #[inline]
-    pub fn corners(&self) -> [(Vec3, Vec3); 8] {
-        let [lo, hi] = [self.min, self.max].map(|v| [v.x, v.y, v.z].map(|c| c.to_array()));
-        std::array::from_fn(|k| {
-            (
-                Vec3::new(lo[0][k], lo[1][k], lo[2][k]),
-                Vec3::new(hi[0][k], hi[1][k], hi[2][k]),
-            )
-        })
+    pub fn corners(&self, k: usize) -> (Vec3, Vec3) {
+        (self.min.lane(k), self.max.lane(k))
     }
 }
 

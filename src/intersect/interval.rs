@@ -183,6 +183,15 @@ impl BoxRay8 {
         }
     }
 
+    /// The lanes `lanes` as one [`RayRange`], if their directions agree in sign.
+    pub fn range(&self, lanes: u8) -> Option<RayRange> {
+        RayRange::of_lanes(
+            std::array::from_fn(|k| self.origin.lane(k)),
+            std::array::from_fn(|k| self.inv_dir.lane(k)),
+            lanes,
+        )
+    }
+
     /// [`BoxRay::interval`] for each ray against the box `[min, max]` (packet
     /// traversal), every lane: the caller keeps the lanes it asks about, so that a node's
     /// children share one mask operation (a bit `and` on the answer).
@@ -197,6 +206,109 @@ impl BoxRay8 {
             t_max,
         };
         lanes.clip()
+    }
+}
+
+/// The rays of a packet as one ray of intervals (interval arithmetic, as in Wald, Boulos
+/// and Shirley's coherent BVH traversal): on each axis the range of the lanes' origins
+/// and of their inverse directions, which must share a sign. Its box test says whether
+/// any of those lanes may enter a box, never no where [`BoxRay8::interval`] says yes for
+/// one of them: on an axis where the directions are positive, every lane's entry slab
+/// distance `(min - o) * inv` is at least `(min - o_hi) * inv` (rounding is monotone),
+/// which is at least the smaller of its products with the two ends of the inverse
+/// directions' range; the exit and negative axes likewise. So a traversal may skip the
+/// boxes it rejects for every lane, and test the lanes of the rest one by one.
+#[derive(Clone, Copy, Debug)]
+pub struct RayRange {
+    /// Per axis, the origin that gives the smallest entry distance (the largest origin
+    /// where the directions are positive, the smallest where negative).
+    entry_origin: Vec3,
+    /// Per axis, the origin that gives the largest exit distance.
+    exit_origin: Vec3,
+    inv_lo: Vec3,
+    inv_hi: Vec3,
+    /// Per axis, whether the directions are negative: rays enter through `max`.
+    negative: [bool; 3],
+}
+
+impl RayRange {
+    /// The range of the rays `origin` and (clamped) `inv_dir` of the lanes in `lanes`, or
+    /// `None` when on some axis their directions differ in sign or no lane is given.
+    fn of_lanes(origin: [Vec3; 8], inv_dir: [Vec3; 8], lanes: u8) -> Option<Self> {
+        let mut given = (0..8).filter(|k| lanes & (1 << k) != 0);
+        let first = given.next()?;
+        let (mut o_lo, mut o_hi) = (origin[first], origin[first]);
+        let (mut inv_lo, mut inv_hi) = (inv_dir[first], inv_dir[first]);
+        for k in given {
+            (o_lo, o_hi) = (o_lo.min(origin[k]), o_hi.max(origin[k]));
+            (inv_lo, inv_hi) = (inv_lo.min(inv_dir[k]), inv_hi.max(inv_dir[k]));
+        }
+        let mut range = RayRange {
+            entry_origin: o_hi,
+            exit_origin: o_lo,
+            inv_lo,
+            inv_hi,
+            negative: [false; 3],
+        };
+        for k in 0..3 {
+            // Clamped inverse directions are never zero, so each lies on one side.
+            match (inv_lo[k] > 0.0, inv_hi[k] < 0.0) {
+                (true, _) => {}
+                (_, true) => {
+                    range.negative[k] = true;
+                    range.entry_origin[k] = o_lo[k];
+                    range.exit_origin[k] = o_hi[k];
+                }
+                _ => return None,
+            }
+        }
+        Some(range)
+    }
+
+    /// Whether any of the rays may be inside the box `[min, max]` (with `min <= max`)
+    /// within `[t_min, t_max]`, `t_max` the largest of the lanes'.
+    #[inline]
+    pub fn enters(&self, min: Vec3, max: Vec3, t_min: f32, t_max: f32) -> bool {
+        let mut entry = t_min;
+        let mut exit = t_max;
+        for k in 0..3 {
+            let (near, far) = if self.negative[k] {
+                (max[k], min[k])
+            } else {
+                (min[k], max[k])
+            };
+            let a = near - self.entry_origin[k];
+            let b = far - self.exit_origin[k];
+            entry = greater(lesser(a * self.inv_lo[k], a * self.inv_hi[k]), entry);
+            exit = lesser(greater(b * self.inv_lo[k], b * self.inv_hi[k]), exit);
+        }
+        entry <= widen_exit(exit)
+    }
+
+    /// [`RayRange::enters`] for the eight boxes of a pack, as a bit mask (padding slots
+    /// may be set: the caller masks them out).
+    #[inline]
+    pub fn enters8(&self, boxes: &BoxPack8, t_min: f32, t_max: f32) -> u8 {
+        let mut entry = F32x8::splat(t_min);
+        let mut exit = F32x8::splat(t_max);
+        let axes = [
+            (boxes.min.x, boxes.max.x),
+            (boxes.min.y, boxes.max.y),
+            (boxes.min.z, boxes.max.z),
+        ];
+        for (k, (min, max)) in axes.into_iter().enumerate() {
+            let (near, far) = if self.negative[k] {
+                (max, min)
+            } else {
+                (min, max)
+            };
+            let a = near - F32x8::splat(self.entry_origin[k]);
+            let b = far - F32x8::splat(self.exit_origin[k]);
+            let (lo, hi) = (F32x8::splat(self.inv_lo[k]), F32x8::splat(self.inv_hi[k]));
+            entry = (a * lo).min(a * hi).max(entry);
+            exit = (b * lo).max(b * hi).min(exit);
+        }
+        entry.le(widen_exit8(exit)).bitmask()
     }
 }
 

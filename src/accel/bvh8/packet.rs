@@ -1,12 +1,13 @@
-//! Packet traversal of the 8-wide tree: each node's children tested against all the
+//! Packet traversal of the 8-wide tree: each node's children culled for the whole packet
+//! by its [`RayRange`] (one test of the eight boxes), those left tested against all the
 //! packet's rays at once, a subtree left with few lanes finished one ray at a time by
 //! `traverse.rs`, so each lane's answer is the single ray's bit for bit.
 
-use super::node::{ChildRef, LEAF, WIDTH};
+use super::node::{ChildRef, Node8, LEAF, WIDTH};
 use super::{Bvh8, STACK_SIZE};
 use crate::accel::hit::{for_lanes, ClosestHit};
 use crate::accel::stack::Stack;
-use crate::intersect::{beyond, BoxRay8};
+use crate::intersect::{beyond, BoxRay8, RayRange};
 use crate::ray::RayPacket;
 use crate::scene::Geometry;
 use crate::simd::F32x8;
@@ -36,6 +37,10 @@ impl Bvh8 {
         let limits =
             |closest: &[ClosestHit; 8]| F32x8::from_array(closest.each_ref().map(|c| c.limit()));
         let mut limit = limits(closest);
+        let range = box_rays.range(active);
+        // The lanes' limits when the walk starts: as hits bring them closer, the lanes'
+        // own box tests cull by distance.
+        let range_limit = largest(limit, active);
         let mut stack = Stack::<(ChildRef, u8, f32), STACK_SIZE>::new();
         stack.push((0, active, t_min));
         while let Some((child, lanes, t_entry)) = stack.pop() {
@@ -70,11 +75,12 @@ impl Bvh8 {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let boxes = node.boxes.corners();
             // (child, its lanes, the nearest lane's entry), for the children entered.
             let mut entered = [(0u32, 0u8, 0f32); WIDTH];
             let mut count = 0;
-            for (c, &(min, max)) in boxes.iter().enumerate().take(node.count as usize) {
+            let candidates = candidates(node, range.as_ref(), t_min, range_limit);
+            for_lanes(candidates, |c| {
+                let (min, max) = node.boxes.corners(c);
                 let intervals = box_rays.interval(min, max, lanes_t_min, limit);
                 let hit = intervals.hit.bitmask() & lanes;
                 if hit != 0 {
@@ -84,7 +90,7 @@ impl Bvh8 {
                     entered[count] = (node.child[c], hit, nearest);
                     count += 1;
                 }
-            }
+            });
             let entered = &mut entered[..count];
             // Farthest first on the stack, so the nearest is popped next.
             entered.sort_unstable_by(|a, b| b.2.total_cmp(&a.2));
@@ -103,6 +109,8 @@ impl Bvh8 {
         let inv_dir = packet.inv_dir_lanes();
         let box_rays = BoxRay8::new(packet);
         let (lanes_t_min, lanes_t_max) = (F32x8::splat(t_min), F32x8::from_array(*t_max));
+        let range = box_rays.range(active);
+        let range_limit = largest(lanes_t_max, active);
         let mut blocked = 0u8;
         let mut stack = Stack::<(ChildRef, u8), STACK_SIZE>::new();
         stack.push((0, active));
@@ -128,15 +136,33 @@ impl Bvh8 {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let boxes = node.boxes.corners();
-            for (c, &(min, max)) in boxes.iter().enumerate().take(node.count as usize) {
+            let candidates = candidates(node, range.as_ref(), t_min, range_limit);
+            for_lanes(candidates, |c| {
+                let (min, max) = node.boxes.corners(c);
                 let intervals = box_rays.interval(min, max, lanes_t_min, lanes_t_max);
                 let hit = intervals.hit.bitmask() & lanes;
                 if hit != 0 {
                     stack.push((node.child[c], hit));
                 }
-            }
+            });
         }
         blocked
     }
+}
+
+/// The largest of `t`'s lanes in `lanes`.
+fn largest(t: F32x8, lanes: u8) -> f32 {
+    let t = t.to_array();
+    let mut largest = f32::NEG_INFINITY;
+    for_lanes(lanes, |k| largest = largest.max(t[k]));
+    largest
+}
+
+/// The used children of `node` that some ray of `range` may enter (all of them without
+/// a range), as a bit mask: the children left to test lane by lane.
+fn candidates(node: &Node8, range: Option<&RayRange>, t_min: f32, t_max: f32) -> u8 {
+    let used = ((1u32 << node.count) - 1) as u8;
+    range.map_or(used, |range| {
+        range.enters8(&node.boxes, t_min, t_max) & used
+    })
 }
