@@ -367,30 +367,27 @@ fn crash_37bf_agrees_with_the_standard_profile() {
     assert_agrees(&CRASH_37BF, Profile::Standard);
 }
 
-/// Open, found by accel_agreement on 2026-11-30: a sphere of radius 1e9 seen from 1e9
-/// away, with the course profile, whose textbook quadratic (`b^2 - c` with both about
-/// 1e18) gives hit distances off by far more than the precise test's; brute force and
-/// the grid (packets) then give different images. The same scene with the precise test
-/// (standard profile) agrees, so the textbook test's error is the likely cause, meeting
-/// the grid's early exit at the first cell that holds a hit; not yet traced. Ignored
-/// until the structures allow for that error, or the course profile confines the
-/// textbook test to where the course's scenes need it.
+/// Found by accel_agreement on 2026-11-30: a sphere of radius 1e9 seen from 1e9 away,
+/// with the course profile, whose textbook quadratic (`b^2 - c` with both about 1e18)
+/// gives hit distances off by far more than the precise test's; brute force and the grid
+/// (packets) gave different images. The grid stopped at the first cell holding a hit
+/// without allowing for the rounding of where the next cells start; its walk now does
+/// (`accel::grid::Dda`), and the two agree. Still open: the fuzz target's BVH (packets)
+/// gives another image than brute force here with the course profile.
 #[test]
-#[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
 fn crash_37bf_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_37BF, Profile::Course);
 }
 
 /// crash-975e0caabb90 (2026-11-30, over 1fadf91): another sphere of radius 1e9 seen from
-/// 1e9 away, the same open case as crash-37bf537fbff3 with the course profile; the
-/// standard profile agrees.
+/// 1e9 away, the case of crash-37bf537fbff3; both profiles agree since the grid's walk
+/// allows for rounding, and so does every structure and mode of the fuzz target.
 #[test]
 fn crash_975e_agrees_with_the_standard_profile() {
     assert_agrees(&CRASH_975E, Profile::Standard);
 }
 
 #[test]
-#[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
 fn crash_975e_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_975E, Profile::Course);
 }
@@ -407,7 +404,7 @@ fn crash_1def_agrees_with_the_standard_profile() {
 }
 
 #[test]
-#[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
+#[ignore = "open finding: with the course profile brute force and the grid differ"]
 fn crash_1def_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_1DEF, Profile::Course);
 }
@@ -415,8 +412,8 @@ fn crash_1def_agrees_with_the_course_profile() {
 /// crash-156f529883bf (2026-11-30, the 30-minute run over the stream renderer, 504091c,
 /// 2.5 minutes in): boxes and triangles with coordinates of 1e9, a sphere of radius 3.5,
 /// the camera 1.7e9 away. With the course profile brute force and the grid (packets)
-/// differ; with the standard profile they agree, as for crash-37bf537fbff3, the likely
-/// same open case. Not traced. The grid in stream mode differs from brute force too, and
+/// differ; with the standard profile they agree. Not crash-37bf537fbff3's case, which
+/// the grid's allowance for rounding mended and this one it did not. Not traced. The grid in stream mode differs from brute force too, and
 /// agrees with it under the standard profile (checked once by hand: the fuzz target stops
 /// at the first mode that differs).
 #[test]
@@ -425,7 +422,7 @@ fn crash_156f_agrees_with_the_standard_profile() {
 }
 
 #[test]
-#[ignore = "open finding: the course profile's textbook roots and the grid's early exit"]
+#[ignore = "open finding: with the course profile brute force and the grid differ"]
 fn crash_156f_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_156F, Profile::Course);
 }
@@ -448,23 +445,19 @@ fn crash_6c89_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_6C89, Profile::Course);
 }
 
-/// Open, crash-b88aacef2014 (2026-11-30, the 31-minute run over the stream renderer): a
-/// box 1e9 long and 0.5 thin beside the camera, spheres of radius 5.5 and moving spheres
-/// with extreme values. The grid, in every mode, gives 3 of the 48 pixels otherwise than
-/// brute force and the BVH, already at depth 1, with either profile. Traced so far: shadow
-/// rays from moving spheres about 1e9 away to the light at the origin pass the sphere of
-/// radius 5.5 at (5.5, 5.5, 5.5) just before the light; brute force finds it blocking
-/// (`t = 1.0282571e9` of `1.0282572e9`), the grid misses it, even with no upper limit.
-/// Confirmed with the walk printed beside the true cells (in double precision): the grid
-/// has 4 x 4 x 4 cells with planes at y = 0 and z = 0, and the sphere is in cell
-/// (1, 2, 2). The ray crosses z = 0 first and then y = 0, some 50 units apart at
-/// `t = 1.03e9`, where floats are 64 apart; the walk computes the crossings in the other
-/// order, steps y first and goes (1, 2, 1), (1, 1, 1), (1, 1, 2), skipping (1, 2, 2).
-/// A fix must visit both cells beside an edge when the two crossings lie within their
-/// rounding of each other (and the stop rule must allow for that rounding too), in the
-/// single-ray and the packet walks alike.
+/// crash-b88aacef2014 (2026-11-30, the 31-minute run over the stream renderer): a box
+/// 1e9 long and 0.5 thin beside the camera, spheres of radius 5.5 and moving spheres with
+/// extreme values. The grid, in every mode, gave 3 of the 48 pixels otherwise than brute
+/// force and the BVH, with either profile: shadow rays from moving spheres about 1e9
+/// away to the light at the origin pass the sphere of radius 5.5 at (5.5, 5.5, 5.5) just
+/// before the light; brute force finds it blocking (`t = 1.0282571e9` of `1.0282572e9`).
+/// The ray crosses z = 0 first and then y = 0, some 50 units apart at `t = 1.03e9`, where
+/// floats are 64 apart; the walk computed the crossings in the other order, stepped y
+/// first and skipped the sphere's cell (1, 2, 2). Fixed in `accel::grid::Dda`, which now
+/// keeps per axis the range of slabs the ray may be in, allowing for the rounding of
+/// each crossing, and visits every cell those ranges make; `tests/accel.rs` tests rays
+/// from far away against brute force.
 #[test]
-#[ignore = "open finding: the grid differs from brute force beside a box 1e9 long"]
 fn crash_b88a_agrees_with_the_standard_profile() {
     assert_agrees(&CRASH_B88A, Profile::Standard);
 }

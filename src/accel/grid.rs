@@ -13,7 +13,7 @@ use glam::{IVec3, UVec3, Vec3};
 
 use super::bounds::prim_bounds;
 use super::hit::{for_lanes, ClosestHit};
-use crate::intersect::{widen_entry, Aabb, BoxRay};
+use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay};
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{lane_mask, Hit, Ray, RayPacket};
 use crate::scene::Geometry;
@@ -28,8 +28,10 @@ pub const MAX_AXIS_CELLS: u32 = 512;
 pub struct Grid {
     bounds: Aabb,
     resolution: UVec3,
-    cell_size: Vec3,
     inv_cell_size: Vec3,
+    /// `bounds.min`, the cells' size and `resolution` as arrays, which the walk indexes by
+    /// axis (a glam vector's index is a `match`).
+    axes: Axes,
     /// Cell `c`'s objects are `refs[cell_start[c]..cell_start[c + 1]]` (cells x fastest).
     cell_start: Vec<u32>,
     /// Indices into `prims`.
@@ -37,6 +39,14 @@ pub struct Grid {
     prims: Vec<PrimId>,
     density: f32,
     mailbox: bool,
+}
+
+/// The grid's planes, axis by axis.
+#[derive(Clone, Copy, Debug)]
+struct Axes {
+    min: [f32; 3],
+    cell_size: [f32; 3],
+    cells: [i32; 3],
 }
 
 impl Grid {
@@ -70,8 +80,12 @@ impl Grid {
         let mut grid = Grid {
             bounds,
             resolution,
-            cell_size,
             inv_cell_size,
+            axes: Axes {
+                min: bounds.min.to_array(),
+                cell_size: cell_size.to_array(),
+                cells: resolution.as_ivec3().to_array(),
+            },
             cell_start: Vec::new(),
             refs: Vec::new(),
             prims,
@@ -126,6 +140,11 @@ impl Grid {
         c.max(Vec3::ZERO).min(max).as_uvec3()
     }
 
+    /// Whether slab `i` along axis `k` is one of the grid's.
+    fn holds(&self, k: usize, i: i32) -> bool {
+        0 <= i && i < self.axes.cells[k]
+    }
+
     fn cell_index(&self, c: UVec3) -> usize {
         ((c.z * self.resolution.y + c.y) * self.resolution.x + c.x) as usize
     }
@@ -153,8 +172,9 @@ impl Grid {
                         closest.test(geometry, self.prims[r as usize], ray, inv_dir, t_min);
                     }
                 }
-                // Stop once the closest hit lies inside the cells walked so far.
-                if closest.limit() < t_exit {
+                // Stop once the closest hit lies inside the cells walked so far (by the
+                // allowance: the cells ahead may start within rounding of `t_exit`).
+                if beyond(t_exit, closest.limit()) {
                     return Walk::Stop;
                 }
                 Walk::Continue(closest.limit())
@@ -269,7 +289,7 @@ impl Grid {
                 // As `closest`: stop once the closest hit lies in the cells walked.
                 let limit = closest[k].limit();
                 dda.t_end = dda.t_end.min(limit);
-                *walk = self.step(*dda, limit < dda.t_exit());
+                *walk = self.step(*dda, beyond(dda.t_exit(), limit));
             }
         }
     }
@@ -394,78 +414,226 @@ impl Grid {
     }
 }
 
-/// One ray's 3D-DDA walk through the cells (Amanatides and Woo).
+/// One ray's 3D-DDA walk through the cells (Amanatides and Woo), made robust to the
+/// rounding of its plane crossings. A crossing distance `(plane - origin) * inv_dir` is
+/// off by up to `GAMMA_3` of itself, so along each axis the ray may be in a slab of cells
+/// from its computed entry less the allowance to its exit plus it. (A ray from 1e9 away,
+/// where floats are 64 apart, may cross two planes 50 units apart in either order: fuzz
+/// finding crash-b88a; and the point where it enters a small grid may be computed in
+/// another cell altogether.) The walk sweeps the distance along the ray and keeps, per
+/// axis, the range of slabs the ray may be in (`first..=last`, in the order the ray goes);
+/// when a slab joins a range, the cells it adds, that slab against the other axes'
+/// ranges, are visited. Where rounding is far below the cells' size, each range holds one
+/// slab, or two near a plane, and the walk is the classic one plus the cells beside an
+/// edge that it passes within rounding of.
 #[derive(Clone, Copy, Debug)]
 struct Dda {
+    /// The cell being visited.
     cell: IVec3,
-    step: IVec3,
-    /// Distance to the next cell boundary along each axis, and between boundaries.
-    t_next: Vec3,
-    t_delta: Vec3,
+    /// Per axis, the direction the slabs go in (0 where the ray runs along the axis).
+    step: [i32; 3],
+    origin: [f32; 3],
+    inv_dir: [f32; 3],
+    /// Per axis, the first and the last slab the ray may be in.
+    first: [i32; 3],
+    last: [i32; 3],
+    /// Per axis, where the ray crosses the plane after `last` (infinite where there is
+    /// none), where the slab after `last` may start (that crossing less the allowance),
+    /// and where `first` may end if another follows it (infinite otherwise).
+    t_plane: [f32; 3],
+    t_join: [f32; 3],
+    t_drop: [f32; 3],
+    /// The cells being visited, `cell` among them: a box of cells from one corner to the
+    /// other, in the order the ray goes, visited axis by axis.
+    batch: Option<([i32; 3], [i32; 3])>,
+    /// The distance from which the batch's cells may hold the ray.
+    t_joined: f32,
     /// The walk ends past this distance.
     t_end: f32,
 }
 
+/// The cell after `cell` in the box from `from` to `to` (its corners in the order of
+/// `step`), axis by axis; `None` after the last.
+fn next_in_box(cell: IVec3, from: [i32; 3], to: [i32; 3], step: [i32; 3]) -> Option<IVec3> {
+    let mut cell = cell.to_array();
+    for k in 0..3 {
+        if cell[k] != to[k] {
+            cell[k] += step[k];
+            return Some(IVec3::from_array(cell));
+        }
+        cell[k] = from[k];
+    }
+    None
+}
+
+/// The earliest distance within rounding of the computed `t`, of either sign.
+fn lower(t: f32) -> f32 {
+    if t >= 0.0 {
+        widen_entry(t)
+    } else {
+        -widen_exit(-t)
+    }
+}
+
+/// The latest distance within rounding of the computed `t`, of either sign.
+fn upper(t: f32) -> f32 {
+    if t >= 0.0 {
+        widen_exit(t)
+    } else {
+        -widen_entry(-t)
+    }
+}
+
 impl Dda {
-    /// The walk of `ray` within `(t_min, t_max)`, in the cell where it enters the grid
-    /// (or starts inside it); `None` when it misses the grid.
+    /// The walk of `ray` within `(t_min, t_max)`, at the first cell where it may enter
+    /// the grid (or start inside it); `None` when it misses the grid.
     fn start(grid: &Grid, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<Dda> {
         if grid.refs.is_empty() {
             return None;
         }
         let bounds = BoxRay::new(ray.origin, inv_dir);
         let (entry, exit) = bounds.interval(grid.bounds.min, grid.bounds.max, t_min, t_max)?;
-        // The start cell is the one holding the entry point, so the entry must not be
-        // late: a ray entering across the corner of a cell would skip it. Stepped back by
-        // the allowance, the walk may start a cell early, which only costs a visit.
         let t_enter = t_min.max(widen_entry(entry));
         // The exit is widened already; the walk needs nothing beyond the ray's end.
         let t_leave = t_max.min(exit);
-        let cell = grid.cell_of(ray.at(t_enter)).as_ivec3();
-        let mut t_next = Vec3::INFINITY;
-        let mut t_delta = Vec3::INFINITY;
-        for k in 0..3 {
-            if ray.dir[k] != 0.0 && inv_dir[k].is_finite() {
-                let side = if ray.dir[k] > 0.0 { 1 } else { 0 };
-                let boundary = grid.bounds.min[k] + (cell[k] + side) as f32 * grid.cell_size[k];
-                t_next[k] = (boundary - ray.origin[k]) * inv_dir[k];
-                t_delta[k] = grid.cell_size[k] * inv_dir[k].abs();
+        // A first guess, which the ranges below correct: the cell of the entry point.
+        let guess = grid.cell_of(ray.at(t_enter)).as_ivec3().to_array();
+        let walks = |k: usize| ray.dir[k] != 0.0 && inv_dir[k].is_finite();
+        let mut dda = Dda {
+            cell: IVec3::from_array(guess),
+            step: [0, 1, 2].map(|k| match walks(k) {
+                true => ray.dir[k].signum() as i32,
+                false => 0,
+            }),
+            origin: ray.origin.to_array(),
+            inv_dir: inv_dir.to_array(),
+            first: guess,
+            last: guess,
+            t_plane: [f32::INFINITY; 3],
+            t_join: [f32::INFINITY; 3],
+            t_drop: [f32::INFINITY; 3],
+            batch: None,
+            t_joined: t_enter,
+            t_end: t_leave,
+        };
+        for k in (0..3).filter(|&k| walks(k)) {
+            // The slabs the ray may be in at `t_enter`: from the first whose exit may
+            // come after it to the last whose entry may come before it.
+            let step = dda.step[k];
+            let mut a = guess[k];
+            while grid.holds(k, a - step) && upper(dda.crossing(grid, k, a - step)) >= t_enter {
+                a -= step;
+            }
+            while grid.holds(k, a + step) && upper(dda.crossing(grid, k, a)) < t_enter {
+                a += step;
+            }
+            let mut b = a;
+            while grid.holds(k, b + step) && lower(dda.crossing(grid, k, b)) <= t_enter {
+                b += step;
+            }
+            (dda.first[k], dda.last[k]) = (a, b);
+            dda.next_plane(grid, k);
+            if a != b {
+                dda.t_drop[k] = upper(dda.crossing(grid, k, a));
             }
         }
-        Some(Dda {
-            cell,
-            step: ray.dir.signum().as_ivec3(),
-            t_next,
-            t_delta,
-            t_end: t_leave,
-        })
+        dda.cell = IVec3::from_array(dda.first);
+        dda.batch = (dda.first != dda.last).then_some((dda.first, dda.last));
+        Some(dda)
     }
 
-    /// Where the ray leaves the current cell.
-    fn t_exit(&self) -> f32 {
-        self.t_next.min_element()
+    /// Where the ray crosses the plane by which it leaves slab `i` along axis `k`.
+    fn crossing(&self, grid: &Grid, k: usize, i: i32) -> f32 {
+        let plane_index = if self.step[k] > 0 { i + 1 } else { i };
+        let plane = grid.axes.min[k] + plane_index as f32 * grid.axes.cell_size[k];
+        (plane - self.origin[k]) * self.inv_dir[k]
     }
 
-    /// Steps into the next cell; `false` when the walk is over (past `t_end`, or out of
-    /// the grid).
-    fn advance(&mut self, grid: &Grid) -> bool {
-        let t_next = self.t_next;
-        if !(t_next.min_element() <= self.t_end) {
-            return false;
-        }
-        let k = if t_next.x <= t_next.y && t_next.x <= t_next.z {
-            0
-        } else if t_next.y <= t_next.z {
-            1
-        } else {
-            2
+    /// `t_plane` and `t_join` of axis `k`, for the plane after its `last` slab.
+    fn next_plane(&mut self, grid: &Grid, k: usize) {
+        let last = self.last[k];
+        self.t_plane[k] = match grid.holds(k, last + self.step[k]) {
+            true => self.crossing(grid, k, last),
+            false => f32::INFINITY,
         };
-        self.cell[k] += self.step[k];
-        if self.cell[k] < 0 || self.cell[k] >= grid.resolution.as_ivec3()[k] {
-            return false;
+        self.t_join[k] = lower(self.t_plane[k]);
+    }
+
+    /// Drops the first slab of axis `k`'s range.
+    fn drop_first(&mut self, grid: &Grid, k: usize) {
+        self.first[k] += self.step[k];
+        self.t_drop[k] = match self.first[k] != self.last[k] {
+            true => upper(self.crossing(grid, k, self.first[k])),
+            false => f32::INFINITY,
+        };
+    }
+
+    /// From where the cells not yet visited may hold the ray: the rest of the batch, or
+    /// the next slab to join.
+    fn t_exit(&self) -> f32 {
+        match self.batch {
+            Some((from, to)) if next_in_box(self.cell, from, to, self.step).is_some() => {
+                self.t_joined
+            }
+            _ => min3(self.t_join),
         }
-        self.t_next[k] += self.t_delta[k];
-        true
+    }
+
+    /// Moves to the next cell to visit; `false` when the walk is over (no slab may join
+    /// before `t_end`).
+    fn advance(&mut self, grid: &Grid) -> bool {
+        if let Some((from, to)) = self.batch {
+            if let Some(next) = next_in_box(self.cell, from, to, self.step) {
+                self.cell = next;
+                return true;
+            }
+            self.batch = None;
+        }
+        loop {
+            let (join, drop) = (min3(self.t_join), min3(self.t_drop));
+            if drop < join {
+                // A slab the ray has surely left: fewer cells for the slabs to come.
+                self.drop_first(grid, argmin(self.t_drop));
+                continue;
+            }
+            if !(join < f32::INFINITY && join <= widen_exit(self.t_end)) {
+                return false;
+            }
+            let k = argmin(self.t_join);
+            if self.first[k] == self.last[k] {
+                // The slab left may end by the plane just crossed.
+                self.t_drop[k] = upper(self.t_plane[k]);
+            }
+            self.last[k] += self.step[k];
+            self.next_plane(grid, k);
+            // The slab left adds cells only with slabs joining before it drops: where none
+            // does, it drops at once (the common case, one event a step).
+            if self.t_drop[k] < min3(self.t_join) {
+                self.drop_first(grid, k);
+            }
+            self.t_joined = join;
+            let (mut from, mut to) = (self.first, self.last);
+            (from[k], to[k]) = (self.last[k], self.last[k]);
+            self.cell = IVec3::from_array(from);
+            self.batch = (from != to).then_some((from, to));
+            return true;
+        }
+    }
+}
+
+/// The smallest of `t`'s three.
+fn min3(t: [f32; 3]) -> f32 {
+    t[0].min(t[1]).min(t[2])
+}
+
+/// The axis of `t`'s smallest component, the first of equals.
+fn argmin(t: [f32; 3]) -> usize {
+    if t[0] <= t[1] && t[0] <= t[2] {
+        0
+    } else if t[1] <= t[2] {
+        1
+    } else {
+        2
     }
 }
 
