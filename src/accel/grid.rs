@@ -289,7 +289,8 @@ impl Grid {
                 // As `closest`: stop once the closest hit lies in the cells walked.
                 let limit = closest[k].limit();
                 dda.t_end = dda.t_end.min(limit);
-                *walk = self.step(*dda, beyond(dda.t_exit(), limit));
+                let stop = beyond(dda.t_exit(), limit);
+                self.step(walk, stop);
             }
         }
     }
@@ -337,9 +338,7 @@ impl Grid {
                 }
             });
             for (k, walk) in walks.iter_mut().enumerate() {
-                if let Some(dda) = walk {
-                    *walk = self.step(*dda, blocked & (1 << k) != 0);
-                }
+                self.step(walk, blocked & (1 << k) != 0);
             }
         }
     }
@@ -357,28 +356,29 @@ impl Grid {
             (packet.active & (1 << k) != 0)
                 .then(|| Dda::start(self, &rays[k], inv_dir[k], t_min, t_max[k]))
                 .flatten()
-                .and_then(|dda| self.skip_empty(dda))
+                .and_then(|mut dda| self.skip_empty(&mut dda).then_some(dda))
         })
     }
 
-    /// The walk after `dda`'s cell, in the next cell with objects; `None` when `stop`
-    /// says so or the walk ends.
-    fn step(&self, mut dda: Dda, stop: bool) -> Option<Dda> {
-        if stop || !dda.advance(self) {
-            return None;
-        }
-        self.skip_empty(dda)
-    }
-
-    /// Walks `dda` on through empty cells; `None` when the walk ends before a cell with
-    /// objects.
-    fn skip_empty(&self, mut dda: Dda) -> Option<Dda> {
-        while self.cell_refs(dda.cell).is_empty() {
-            if !dda.advance(self) {
-                return None;
+    /// Moves `walk` (in place: a walk is some 160 bytes) past its cell to the next cell
+    /// with objects; ends it (`None`) when `stop` says so or the walk ends.
+    fn step(&self, walk: &mut Option<Dda>, stop: bool) {
+        if let Some(dda) = walk {
+            if stop || !dda.advance(self) || !self.skip_empty(dda) {
+                *walk = None;
             }
         }
-        Some(dda)
+    }
+
+    /// Walks `dda` on through empty cells; `false` when the walk ends before a cell with
+    /// objects.
+    fn skip_empty(&self, dda: &mut Dda) -> bool {
+        while self.cell_refs(dda.cell).is_empty() {
+            if !dda.advance(self) {
+                return false;
+            }
+        }
+        true
     }
 
     /// The objects of cell `cell`, as indices into `prims`.
@@ -520,21 +520,28 @@ impl Dda {
             // The slabs the ray may be in at `t_enter`: from the first whose exit may
             // come after it to the last whose entry may come before it.
             let step = dda.step[k];
+            let exit = |i: i32| match grid.holds(k, i + step) {
+                true => dda.crossing(grid, k, i),
+                false => f32::INFINITY,
+            };
             let mut a = guess[k];
-            while grid.holds(k, a - step) && upper(dda.crossing(grid, k, a - step)) >= t_enter {
+            while grid.holds(k, a - step) && upper(exit(a - step)) >= t_enter {
                 a -= step;
             }
-            while grid.holds(k, a + step) && upper(dda.crossing(grid, k, a)) < t_enter {
+            let mut exit_a = exit(a);
+            while upper(exit_a) < t_enter {
                 a += step;
+                exit_a = exit(a);
             }
-            let mut b = a;
-            while grid.holds(k, b + step) && lower(dda.crossing(grid, k, b)) <= t_enter {
+            let (mut b, mut exit_b) = (a, exit_a);
+            while lower(exit_b) <= t_enter {
                 b += step;
+                exit_b = exit(b);
             }
             (dda.first[k], dda.last[k]) = (a, b);
-            dda.next_plane(grid, k);
+            (dda.t_plane[k], dda.t_join[k]) = (exit_b, lower(exit_b));
             if a != b {
-                dda.t_drop[k] = upper(dda.crossing(grid, k, a));
+                dda.t_drop[k] = upper(exit_a);
             }
         }
         dda.cell = IVec3::from_array(dda.first);
@@ -590,7 +597,8 @@ impl Dda {
             self.batch = None;
         }
         loop {
-            let (join, drop) = (min3(self.t_join), min3(self.t_drop));
+            let k = argmin(self.t_join);
+            let (join, drop) = (self.t_join[k], min3(self.t_drop));
             if drop < join {
                 // A slab the ray has surely left: fewer cells for the slabs to come.
                 self.drop_first(grid, argmin(self.t_drop));
@@ -599,19 +607,27 @@ impl Dda {
             if !(join < f32::INFINITY && join <= widen_exit(self.t_end)) {
                 return false;
             }
-            let k = argmin(self.t_join);
-            if self.first[k] == self.last[k] {
-                // The slab left may end by the plane just crossed.
-                self.t_drop[k] = upper(self.t_plane[k]);
-            }
+            let crossed = self.t_plane[k];
+            let single = self.first[k] == self.last[k];
             self.last[k] += self.step[k];
             self.next_plane(grid, k);
-            // The slab left adds cells only with slabs joining before it drops: where none
-            // does, it drops at once (the common case, one event a step).
-            if self.t_drop[k] < min3(self.t_join) {
-                self.drop_first(grid, k);
-            }
             self.t_joined = join;
+            if single {
+                // The slab left may last until the plane just crossed, plus rounding, but
+                // adds cells only if another slab joins meanwhile: where none does, it
+                // drops at once (the common case, one event a step).
+                let left = upper(crossed);
+                if left < min3(self.t_join) {
+                    self.first[k] = self.last[k];
+                } else {
+                    self.t_drop[k] = left;
+                }
+            }
+            if drop == f32::INFINITY {
+                // Every range held one slab: the one cell of the slab that joined.
+                self.cell = IVec3::from_array(self.last);
+                return true;
+            }
             let (mut from, mut to) = (self.first, self.last);
             (from[k], to[k]) = (self.last[k], self.last[k]);
             self.cell = IVec3::from_array(from);
