@@ -12,7 +12,7 @@ cargo build --release --quiet
 p3trace=target/release/p3trace
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
-modes=(scalar packet stream)
+modes=(scalar stream)
 
 seconds() { # scene spp mode
   "$p3trace" render "$shared/scenes/$1.p3f" --accel bvh --no-skybox --threads 1 --spp "$2" \
@@ -20,17 +20,17 @@ seconds() { # scene spp mode
   python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["render_s"])' "$out/run.json"
 }
 
-echo "| scene | spp | run | scalar s | packet s | stream s | packet / scalar | stream / scalar |"
-echo "|---|---|---|---|---|---|---|---|"
+echo "| scene | spp | run | scalar s | stream s | stream / scalar |"
+echo "|---|---|---|---|---|---|"
 for scene in dragon balls_high mount_very_high; do
   for spp in 1 16; do
     for run in $(seq "$runs"); do
       declare -A t=()
       for mode in "${modes[@]}"; do t[$mode]=$(seconds "$scene" "$spp" "$mode"); done
       python3 -c 'import sys
-s, p, st = map(float, sys.argv[4:7])
-print(f"| {sys.argv[1]} | {sys.argv[2]} | {sys.argv[3]} | {s:.3f} | {p:.3f} | {st:.3f} | {s / p:.2f} | {s / st:.2f} |")' \
-        "$scene" "$spp" "$run" "${t[scalar]}" "${t[packet]}" "${t[stream]}"
+s, st = map(float, sys.argv[4:6])
+print(f"| {sys.argv[1]} | {sys.argv[2]} | {sys.argv[3]} | {s:.3f} | {st:.3f} | {s / st:.2f} |")' \
+        "$scene" "$spp" "$run" "${t[scalar]}" "${t[stream]}"
     done
   done
 done

@@ -263,8 +263,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "T0,T1", value_parser = parse_shutter)]
     pub shutter: Option<[f32; 2]>,
     /// How rays travel: stream (a tile's rays depth by depth, each depth's rays and shadow
-    /// rays eight at a time), packet (primary rays and their shadow rays eight at a time,
-    /// deeper rays one by one) or scalar (one at a time, the reference). All give the same
+    /// rays eight at a time) or scalar (one at a time, the reference). Both give the same
     /// image byte for byte.
     #[arg(long, value_enum, value_name = "MODE", default_value_t = ModeChoice::Stream)]
     pub mode: ModeChoice,
@@ -361,7 +360,6 @@ pub enum ProfileChoice {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ModeChoice {
     Stream,
-    Packet,
     Scalar,
 }
 

@@ -198,7 +198,6 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     options.threads = args.threads.map(|n| n as usize);
     options.seed = args.seed;
     options.mode = match args.mode {
-        ModeChoice::Packet => RenderMode::Packet,
         ModeChoice::Scalar => RenderMode::Scalar,
         ModeChoice::Stream => RenderMode::Stream,
     };

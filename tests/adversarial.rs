@@ -208,7 +208,7 @@ fn render_everywhere(name: &str, text: &str) -> (image::RgbImage, String) {
     let scene = write_scene(&dir, text);
     let mut first: Option<(image::RgbImage, String)> = None;
     for accel in ["none", "grid", "bvh"] {
-        for mode in ["scalar", "packet", "stream"] {
+        for mode in ["scalar", "stream"] {
             let image_path = dir.join(format!("{accel}-{mode}.ppm"));
             let out = p3trace(&[
                 "render",

@@ -470,7 +470,7 @@ fn effects_at_neutral_values_give_the_whitted_image() {
 }
 
 /// With every effect on, the image depends on the seed and on nothing else: not on the
-/// thread count, the packet or scalar path, or the structure.
+/// thread count, the stream or scalar path, or the structure.
 #[test]
 fn effects_are_deterministic_across_threads_modes_and_structures() {
     let mut scenes = vec![

@@ -324,7 +324,7 @@ const CRASH_B88A: Finding = Finding {
 
 /// Renders a scene of accel_agreement as the fuzz target renders it (8 x 6 pixels, one
 /// thread, depth 3, two jittered samples with every effect on) with shading `profile`, by
-/// brute force (scalar) and by the grid (packets), and asserts that the images agree.
+/// brute force (scalar) and by the grid (stream mode), and asserts that the images agree.
 fn assert_agrees(finding: &Finding, profile: Profile) {
     let mut scene = parse_text(finding.text).unwrap();
     scene.camera = p3trace::scene::CameraSpec {
@@ -346,7 +346,7 @@ fn assert_agrees(finding: &Finding, profile: Profile) {
     options.shutter = [0.0, 0.5];
     let [brute, grid] = [
         (AccelKind::None, RenderMode::Scalar),
-        (AccelKind::Grid, RenderMode::Packet),
+        (AccelKind::Grid, RenderMode::Stream),
     ]
     .map(|(kind, mode)| {
         options.accel.kind = kind;
@@ -372,7 +372,7 @@ fn crash_37bf_agrees_with_the_standard_profile() {
 /// gives hit distances off by far more than the precise test's; brute force and the grid
 /// (packets) gave different images. The grid stopped at the first cell holding a hit
 /// without allowing for the rounding of where the next cells start; its walk now does
-/// (`accel::grid::Dda`), and the two agree. Still open: the fuzz target's BVH (packets)
+/// (`accel::grid::Dda`), and the two agree. Still open: the fuzz target's BVH
 /// gives another image than brute force here with the course profile.
 #[test]
 fn crash_37bf_agrees_with_the_course_profile() {

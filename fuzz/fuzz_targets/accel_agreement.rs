@@ -1,5 +1,5 @@
 //! A small random scene, read through the P3F reader, traced by every structure along the
-//! single-ray and the packet paths and rendered in scalar, packet and stream mode: every answer
+//! single-ray and the packet paths and rendered in scalar and stream mode: every answer
 //! must be brute force's, bit for bit, and nothing may panic.
 #![no_main]
 
@@ -289,9 +289,6 @@ fuzz_target!(|input: Input| {
     let mut reference: Option<Vec<u32>> = None;
     for (kind, mode) in [
         (AccelKind::None, RenderMode::Scalar),
-        (AccelKind::None, RenderMode::Packet),
-        (AccelKind::Grid, RenderMode::Packet),
-        (AccelKind::Bvh, RenderMode::Packet),
         (AccelKind::Bvh, RenderMode::Scalar),
         (AccelKind::None, RenderMode::Stream),
         (AccelKind::Grid, RenderMode::Stream),

@@ -21,14 +21,14 @@ use rayon::prelude::*;
 use crate::accel::{Accel, AccelKind, AccelOptions, Tracer};
 use crate::intersect::SphereRoots;
 use crate::limits::{check_image_size, MAX_SPP_SIDE};
-use crate::ray::{lane_mask, Ray, RayPacket};
+use crate::ray::Ray;
 use crate::scene::Scene;
 use camera::Camera;
 use film::Film;
 use progress::{Meter, Progress};
 use region::Region;
 use sampler::{dim, Sample, SampleGrid, SampleRng};
-use shade::{RayCounts, RayKind, ShadeOptions, Shader, ShadowPacket};
+use shade::{RayCounts, RayKind, ShadeOptions, Shader};
 use skybox::Skybox;
 
 /// Tiles are square blocks of this many pixels a side: the unit of work of a thread.
@@ -83,16 +83,13 @@ impl Sampling {
 pub enum RenderMode {
     /// One ray at a time: the reference path.
     Scalar,
-    /// Primary rays and their shadow rays as packets of eight (4 x 2 pixels); deeper rays
-    /// one at a time. The image is the scalar one, byte for byte.
-    Packet,
     /// A tile's rays breadth first, depth by depth, every depth's rays and shadow rays
     /// as packets of eight (`stream`). The image is the scalar one, byte for byte.
     Stream,
 }
 
 impl RenderMode {
-    pub const ALL: [RenderMode; 3] = [RenderMode::Scalar, RenderMode::Packet, RenderMode::Stream];
+    pub const ALL: [RenderMode; 2] = [RenderMode::Scalar, RenderMode::Stream];
 }
 
 #[derive(Clone, Debug)]
@@ -311,12 +308,13 @@ fn tiles(region: Region, height: u32) -> Vec<Tile> {
 }
 
 thread_local! {
-    /// Each worker's scratch memory, reset for every tile: the sample sums, the packets'
-    /// shadow answers and the streams' queues never go through the global allocator.
+    /// Each worker's scratch memory, reset for every tile: the sample sums and the
+    /// streams' queues never go through the global allocator.
     static SCRATCH: RefCell<Bump> = RefCell::new(Bump::new());
 }
 
-/// Packets cover blocks of this many pixels across and up.
+/// The stream queues a tile's primary samples by blocks of this many pixels across and
+/// up, the pixels of its packets of eight.
 const PACKET_WIDTH: u32 = 4;
 const PACKET_HEIGHT: u32 = 2;
 
@@ -382,8 +380,8 @@ fn render_tile(
 }
 
 /// Adds the colour of every sample of every pixel of `tile` into `sums` (row by row from
-/// the tile's bottom row), one ray at a time, in packets or as streams as `options.mode`
-/// says; scratch space comes from `arena`.
+/// the tile's bottom row), one ray at a time or as streams as `options.mode` says; scratch
+/// space comes from `arena`.
 #[allow(clippy::too_many_arguments)] // the tile's setting, its scratch and its sums
 fn trace_tile(
     shader: &Shader,
@@ -395,19 +393,6 @@ fn trace_tile(
     sums: &mut [Vec3],
     rays: &mut RayCounts,
 ) {
-    // Lane l of the packet whose block starts at (bx, by) is pixel (bx + l % 4, by + l / 4)
-    // of the tile, when that pixel is in the tile.
-    let lane_pixel = |bx: u32, by: u32, l: u32| {
-        let (x, y) = (bx + l % PACKET_WIDTH, by + l / PACKET_WIDTH);
-        (x < tile.width && y < tile.height).then_some((x, y))
-    };
-    let blocks = (0..tile.height)
-        .step_by(PACKET_HEIGHT as usize)
-        .flat_map(|by| {
-            (0..tile.width)
-                .step_by(PACKET_WIDTH as usize)
-                .map(move |bx| (bx, by))
-        });
     match options.mode {
         RenderMode::Scalar => {
             for (i, sum) in sums.iter_mut().enumerate() {
@@ -423,34 +408,20 @@ fn trace_tile(
                 }
             }
         }
-        RenderMode::Packet => {
-            let shadows = arena.alloc_slice_fill_default::<ShadowPacket>(shader.lights.len());
-            for (bx, by) in blocks {
-                let active = lane_mask(|l| lane_pixel(bx, by, l as u32).is_some());
-                for q in 0..grid.rows {
-                    for p in 0..grid.columns {
-                        let lanes: [(Ray, Sample); 8] = std::array::from_fn(|l| {
-                            let (x, y) = lane_pixel(bx, by, l as u32).unwrap_or((bx, by));
-                            sample_ray(tile.x + x, tile.y + y, p, q)
-                        });
-                        let primary_rays = lanes.map(|(ray, _)| ray);
-                        let primary = RayPacket::new(&primary_rays).with_active(active);
-                        let colours = shader.trace_packet(
-                            &primary,
-                            &lanes.map(|(_, sample)| sample),
-                            shadows,
-                            rays,
-                        );
-                        for (l, colour) in colours.iter().enumerate() {
-                            if let Some((x, y)) = lane_pixel(bx, by, l as u32) {
-                                sums[(y * tile.width + x) as usize] += *colour;
-                            }
-                        }
-                    }
-                }
-            }
-        }
         RenderMode::Stream => {
+            // Lane l of the packet whose block starts at (bx, by) is pixel (bx + l % 4, by + l / 4)
+            // of the tile, when that pixel is in the tile.
+            let lane_pixel = |bx: u32, by: u32, l: u32| {
+                let (x, y) = (bx + l % PACKET_WIDTH, by + l / PACKET_WIDTH);
+                (x < tile.width && y < tile.height).then_some((x, y))
+            };
+            let blocks = (0..tile.height)
+                .step_by(PACKET_HEIGHT as usize)
+                .flat_map(|by| {
+                    (0..tile.width)
+                        .step_by(PACKET_WIDTH as usize)
+                        .map(move |bx| (bx, by))
+                });
             // The primary samples in the packets' order: a block's pixels, sample by sample.
             let samples = (tile.width * tile.height * grid.cells()) as usize;
             let mut primary = stream::Queue::with_capacity_in(samples, arena);

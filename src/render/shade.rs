@@ -11,7 +11,7 @@ use super::sampler::{dim, Sample, SampleGrid, SampleRng};
 use super::skybox::Skybox;
 use crate::accel::Tracer;
 use crate::intersect::{spawn_origin, SphereRoots, SurfacePoint};
-use crate::ray::{lane_mask, Hit, Ray, RayPacket};
+use crate::ray::{Hit, Ray};
 use crate::scene::{Frame, Material, Scene};
 
 /// The `course` profile's offset of secondary ray origins along the normal against
@@ -212,6 +212,7 @@ impl<'a> Shader<'a> {
             return self.background(ray.dir, depth);
         };
         let surface = self.surface(ray, &hit);
+        // Each light's shadow ray, traced on the spot (a closure the lights' loop inlines).
         let shadow_of = &mut |light| {
             let shadow = self.shadow_ray(light, sample, &surface, ray.time)?;
             Some((
@@ -219,87 +220,12 @@ impl<'a> Shader<'a> {
                 self.tracer.occluded(&shadow.ray, 0.0, shadow.distance),
             ))
         };
-        self.shade(
-            ray, sample, &hit, &surface, depth, ior_here, rays, shadow_of,
-        )
-    }
-
-    /// The colours seen along up to eight primary rays (lanes set in `active`): the same
-    /// colours as [`Shader::trace`] gives each, with the primary rays and the first shadow
-    /// rays to each light traced as packets. `shadows` is scratch space, one entry per
-    /// light of the shader.
-    ///
-    /// Reflected and transmitted rays go one by one. Tried: recording the rays each
-    /// lane's shading spawns, tracing them as packets and shading again with the answers
-    /// (identical images), which cost 9% more instructions on the dragon (callgrind,
-    /// 2026-11-23): those rays diverge, and the second shading pass costs more than the
-    /// packets save.
-    pub fn trace_packet(
-        &self,
-        packet: &RayPacket,
-        samples: &[Sample; 8],
-        shadows: &mut [ShadowPacket],
-        rays: &mut RayCounts,
-    ) -> [Vec3; 8] {
-        let active = packet.active;
-        rays.primary += u64::from(active.count_ones());
-        let hits = self.tracer.closest_packet(packet);
-        let primary = &packet.rays;
-        let surfaces: [Option<Surface>; 8] =
-            std::array::from_fn(|k| hits[k].map(|hit| self.surface(&primary[k], &hit)));
-        // Every lane's shadow ray to light `index`, traced as one packet and kept for the
-        // lanes' shading.
-        let shadows = &mut shadows[..self.lights.len()];
-        for (index, light_shadows) in shadows.iter_mut().enumerate() {
-            let lanes: [Option<ShadowRay>; 8] = std::array::from_fn(|k| {
-                let surface = surfaces[k].as_ref()?;
-                self.shadow_ray(index, &samples[k], surface, primary[k].time)
-            });
-            // Lanes without a shadow ray stay out of the query's mask: any ray fills them.
-            let unused = Ray::new(Vec3::ZERO, Vec3::Z);
-            let shadow_rays = lanes.map(|shadow| shadow.map_or(unused, |shadow| shadow.ray));
-            let shadow_packet = RayPacket::new(&shadow_rays)
-                .with_t_max(lanes.map(|shadow| shadow.map_or(0.0, |shadow| shadow.distance)))
-                .with_active(lane_mask(|k| lanes[k].is_some()));
-            let blocked = self.tracer.occluded_packet(&shadow_packet);
-            *light_shadows = ShadowPacket { lanes, blocked };
-        }
-        std::array::from_fn(|k| {
-            if active & (1 << k) == 0 {
-                return Vec3::ZERO;
-            }
-            let ray = &primary[k];
-            let Some((hit, surface)) = hits[k].zip(surfaces[k]) else {
-                return self.background(ray.dir, 1);
-            };
-            let shadow_of = &mut |light: usize| shadows[light].lane(k);
-            self.shade(ray, &samples[k], &hit, &surface, 1, 1.0, rays, shadow_of)
-        })
-    }
-
-    /// The colour at `hit` and its `surface` seen along `ray`. `shadow_of(light)` gives
-    /// this hit's shadow ray to that light (`None` when the light is behind the surface)
-    /// and whether something blocks it; deeper rays are traced one by one. Generic rather
-    /// than `dyn`, so that each path's `shadow_of` is inlined into the lights' loop (with
-    /// `dyn` the scalar render ran 5% more instructions; callgrind, balls_low).
-    #[allow(clippy::too_many_arguments)] // the ray's state, its hit, and its shadows
-    fn shade(
-        &self,
-        ray: &Ray,
-        sample: &Sample,
-        hit: &Hit,
-        surface: &Surface,
-        depth: u32,
-        ior_here: f32,
-        rays: &mut RayCounts,
-        shadow_of: &mut impl FnMut(usize) -> Option<(ShadowRay, bool)>,
-    ) -> Vec3 {
-        let material = self.material(hit);
+        let material = self.material(&hit);
         let mut colour = self.local(ray, surface.nf, material, rays, shadow_of);
         if depth >= self.options.max_depth {
             return colour.clamp(Vec3::ZERO, Vec3::ONE);
         }
-        self.spawn(ray, sample, surface, material, ior_here, |child| {
+        self.spawn(ray, sample, &surface, material, ior_here, |child| {
             let seen = self.trace(
                 &child.ray,
                 child.kind,
@@ -541,24 +467,6 @@ pub(super) struct ShadowRay {
     /// The light's distance along `ray`.
     pub distance: f32,
     pub colour: Vec3,
-}
-
-/// One light's shadow rays from the eight lanes of a packet, built once by
-/// [`Shader::trace_packet`] for the packet's occlusion query and kept for each lane's
-/// shading.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct ShadowPacket {
-    /// `None` for lanes without a hit or whose hit the light is behind.
-    lanes: [Option<ShadowRay>; 8],
-    /// Bit k: something blocks lane k's shadow ray.
-    blocked: u8,
-}
-
-impl ShadowPacket {
-    /// Lane `k`'s shadow ray and whether something blocks it, as `shadow_of` answers.
-    fn lane(&self, k: usize) -> Option<(ShadowRay, bool)> {
-        self.lanes[k].map(|shadow| (shadow, self.blocked & (1 << k) != 0))
-    }
 }
 
 /// Reflectance from the exact Fresnel equations: the mean of the two polarisations.
