@@ -118,18 +118,35 @@ fn primitive(all_kinds: bool) -> BoxedStrategy<String> {
 /// A scene of random primitives, some of them exact copies of others (ties), and now
 /// and then a plane.
 fn scene() -> impl Strategy<Value = Scene> {
-    scene_of(true)
+    scene_of(true, false)
 }
 
-/// [`scene`], of every kind of primitive or of those [`primitive`] names.
-fn scene_of(all_kinds: bool) -> impl Strategy<Value = Scene> {
+/// [`scene`], of every kind of primitive or of those [`primitive`] names, and with
+/// `giants` now and then a sphere of radius 1e6 or 1e9 whose surface passes among the
+/// others: it stretches the grid's cells to its size, where the grid's planes lie some
+/// 64 units from where `cell_of` puts them (fuzz finding crash-fb93a9574b59).
+fn scene_of(all_kinds: bool, giants: bool) -> impl Strategy<Value = Scene> {
+    let giant = (point(), 0usize..6, prop::sample::select(vec![1e6f32, 1e9])).prop_map(
+        |(p, axis, radius)| {
+            let mut centre = Vec3::from_array(p);
+            centre[axis / 2] += if axis % 2 == 0 { radius } else { -radius };
+            format!("s {} {} {} {radius}\n", centre.x, centre.y, centre.z)
+        },
+    );
+    let giant = if giants {
+        prop::option::of(giant).boxed()
+    } else {
+        Just(None).boxed()
+    };
     (
         prop::collection::vec(primitive(all_kinds), 0..40),
         prop::collection::vec(any::<prop::sample::Index>(), 0..4),
         prop::option::of(point()),
+        giant,
     )
-        .prop_map(|(prims, copies, plane)| {
+        .prop_map(|(prims, copies, plane, giant)| {
             let mut text = String::from("f 1 1 1 1 1 1 1 0 10 0 1\n");
+            text += giant.as_deref().unwrap_or("");
             for p in &prims {
                 text += p;
                 text += "\n";
@@ -307,7 +324,7 @@ proptest! {
     /// 50 units apart at 1e9 in the wrong order and skipped a cell).
     #[test]
     fn rays_from_far_away_answer_as_brute_force(
-        scene in scene_of(false),
+        scene in scene_of(false, true),
         rays in prop::collection::vec(far_ray(), 8..=8),
     ) {
         let g = &scene.geometry;

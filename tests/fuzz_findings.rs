@@ -2,7 +2,8 @@
 //! was wrong and where it was fixed.
 
 use glam::Vec3;
-use p3trace::accel::AccelKind;
+use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
+use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::sampler::SampleGrid;
 use p3trace::render::shade::Profile;
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
@@ -134,6 +135,41 @@ fn the_grid_finds_a_shadow_ray_from_1e9_away() {
         let difference = far_plane_difference(AccelKind::Grid, mode);
         assert_eq!(difference, None, "{mode:?}");
     }
+}
+
+/// crash-fb93a9574b59 (2026-11-30, fuzzing the grid's new walk, 470eb75): spheres of
+/// radius 2.5 at (2.5, 2.5, 2.5) and one of radius 1e9 make a grid of 4 cells a side,
+/// 5e8 wide, whose planes x = 2.5 and y = 2.5 pass through the small spheres' centre. A
+/// ray from that centre found nothing in the grid: the walk computes a plane as `min + i *
+/// cell_size`, `cell_of` (which places the objects) its boundary by `(x - min) /
+/// cell_size`, and at coordinates of 1e9 the two differ by some 64 units, so the walk
+/// took the ray to be past the boundary `cell_of` placed the spheres behind. Fixed in
+/// `accel::grid`: each axis's crossings allow also for that difference (`plane_error`,
+/// as a distance along the ray).
+#[test]
+fn the_grid_walk_allows_for_where_cell_of_puts_a_boundary() {
+    let scene = parse_text(
+        "pl 0 0 -1000000000 -1000000000 2.5 2.5 2.5 2.5 2.5\n\
+         s 2.5 2.5 2.5 2.5\n\
+         s 2.5 2.5 2.5 2.5\n\
+         s 2.5 2.5 2.5 2.5\n\
+         s 2.5 2.5 1000000000 1000000000\n",
+    )
+    .unwrap();
+    let g = &scene.geometry;
+    let brute = Tracer::new(g, Accel::None);
+    let options = AccelOptions {
+        kind: AccelKind::Grid,
+        ..AccelOptions::default()
+    };
+    let grid = Tracer::new(g, Accel::build(g, &options).0);
+    let d = Vec3::new(0.57735026, 0.57735026, -0.57735026);
+    let rays = [Ray::new(Vec3::splat(2.5), d); 8];
+    let expected = brute.closest(&rays[0], 0.0, 3.5);
+    assert!(expected.is_some());
+    assert_eq!(grid.closest(&rays[0], 0.0, 3.5), expected);
+    let packet = RayPacket::new(&rays).with_t_max([3.5; 8]);
+    assert_eq!(grid.closest_packet(&packet), [expected; 8]);
 }
 
 /// The same scene through the default (8-wide) BVH, one ray at a time and in packets:
@@ -394,17 +430,16 @@ fn crash_975e_agrees_with_the_course_profile() {
 
 /// crash-1defb376cfed (2026-11-30, over 1fadf91, in the 30-minute run that went on past
 /// its findings, with the course profile): the camera inside a sphere of radius 1e9, 3.5
-/// from its centre. Open, and not only the course profile's: brute force and the grid
-/// (packets) give different images with the standard profile too, as they did before
-/// the day's changes (829b439); not yet traced.
+/// from its centre. Brute force and the grid (packets) gave different images with either
+/// profile, as they did before that day's changes (829b439). They agree since the grid's
+/// walk allows for its planes lying some 64 units from where `cell_of` puts the
+/// boundaries in a grid 1e9 wide (crash-fb93a9574b59, above).
 #[test]
-#[ignore = "open finding: inside a sphere of radius 1e9, brute force and the grid differ"]
 fn crash_1def_agrees_with_the_standard_profile() {
     assert_agrees(&CRASH_1DEF, Profile::Standard);
 }
 
 #[test]
-#[ignore = "open finding: with the course profile brute force and the grid differ"]
 fn crash_1def_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_1DEF, Profile::Course);
 }
@@ -412,17 +447,14 @@ fn crash_1def_agrees_with_the_course_profile() {
 /// crash-156f529883bf (2026-11-30, the 30-minute run over the stream renderer, 504091c,
 /// 2.5 minutes in): boxes and triangles with coordinates of 1e9, a sphere of radius 3.5,
 /// the camera 1.7e9 away. With the course profile brute force and the grid (packets)
-/// differ; with the standard profile they agree. Not crash-37bf537fbff3's case, which
-/// the grid's allowance for rounding mended and this one it did not. Not traced. The grid in stream mode differs from brute force too, and
-/// agrees with it under the standard profile (checked once by hand: the fuzz target stops
-/// at the first mode that differs).
+/// differed; with the standard profile they agreed. They agree since the grid's walk
+/// allows for its planes lying off `cell_of`'s boundaries (crash-fb93a9574b59, above).
 #[test]
 fn crash_156f_agrees_with_the_standard_profile() {
     assert_agrees(&CRASH_156F, Profile::Standard);
 }
 
 #[test]
-#[ignore = "open finding: with the course profile brute force and the grid differ"]
 fn crash_156f_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_156F, Profile::Course);
 }

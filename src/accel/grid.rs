@@ -41,12 +41,21 @@ pub struct Grid {
     mailbox: bool,
 }
 
+/// Roundings of a coordinate that a plane of the walk and a boundary of `cell_of` may
+/// differ by: each takes three or four roundings of numbers no larger than the grid's
+/// coordinates, so eight is ample.
+const PLANE_ROUNDING: f32 = 8.0 * f32::EPSILON;
+
 /// The grid's planes, axis by axis.
 #[derive(Clone, Copy, Debug)]
 struct Axes {
     min: [f32; 3],
     cell_size: [f32; 3],
     cells: [i32; 3],
+    /// How far a plane the walk computes (`min + i * cell_size`) may lie from where
+    /// `cell_of`, which places the objects, puts that boundary: a few roundings of the
+    /// grid's coordinates.
+    plane_error: [f32; 3],
 }
 
 impl Grid {
@@ -85,6 +94,7 @@ impl Grid {
                 min: bounds.min.to_array(),
                 cell_size: cell_size.to_array(),
                 cells: resolution.as_ivec3().to_array(),
+                plane_error: (PLANE_ROUNDING * (bounds.min.abs() + bounds.max.abs())).to_array(),
             },
             cell_start: Vec::new(),
             refs: Vec::new(),
@@ -423,9 +433,12 @@ impl Grid {
 /// another cell altogether.) The walk sweeps the distance along the ray and keeps, per
 /// axis, the range of slabs the ray may be in (`first..=last`, in the order the ray goes);
 /// when a slab joins a range, the cells it adds, that slab against the other axes'
-/// ranges, are visited. Where rounding is far below the cells' size, each range holds one
-/// slab, or two near a plane, and the walk is the classic one plus the cells beside an
-/// edge that it passes within rounding of.
+/// ranges, are visited. The ranges allow too for the walk's planes (`min + i *
+/// cell_size`) lying a few roundings of the grid's coordinates from the boundaries that
+/// `cell_of` placed the objects by (`Axes::plane_error`: 64 units in a grid 1e9 wide,
+/// fuzz finding crash-fb93). Where rounding is far below the cells' size, each range
+/// holds one slab, or two near a plane, and the walk is the classic one plus the cells
+/// beside an edge that it passes within rounding of.
 #[derive(Clone, Copy, Debug)]
 struct Dda {
     /// The cell being visited.
@@ -434,6 +447,9 @@ struct Dda {
     step: [i32; 3],
     origin: [f32; 3],
     inv_dir: [f32; 3],
+    /// Per axis, how much later or earlier than computed the ray may cross a boundary
+    /// of `cell_of` because the plane is not quite there (`plane_error * |inv_dir|`).
+    slack: [f32; 3],
     /// Per axis, the first and the last slab the ray may be in.
     first: [i32; 3],
     last: [i32; 3],
@@ -507,6 +523,10 @@ impl Dda {
             }),
             origin: ray.origin.to_array(),
             inv_dir: inv_dir.to_array(),
+            slack: [0, 1, 2].map(|k| match walks(k) {
+                true => grid.axes.plane_error[k] * inv_dir[k].abs(),
+                false => 0.0,
+            }),
             first: guess,
             last: guess,
             t_plane: [f32::INFINITY; 3],
@@ -525,23 +545,23 @@ impl Dda {
                 false => f32::INFINITY,
             };
             let mut a = guess[k];
-            while grid.holds(k, a - step) && upper(exit(a - step)) >= t_enter {
+            while grid.holds(k, a - step) && dda.late(k, exit(a - step)) >= t_enter {
                 a -= step;
             }
             let mut exit_a = exit(a);
-            while upper(exit_a) < t_enter {
+            while dda.late(k, exit_a) < t_enter {
                 a += step;
                 exit_a = exit(a);
             }
             let (mut b, mut exit_b) = (a, exit_a);
-            while lower(exit_b) <= t_enter {
+            while dda.early(k, exit_b) <= t_enter {
                 b += step;
                 exit_b = exit(b);
             }
             (dda.first[k], dda.last[k]) = (a, b);
-            (dda.t_plane[k], dda.t_join[k]) = (exit_b, lower(exit_b));
+            (dda.t_plane[k], dda.t_join[k]) = (exit_b, dda.early(k, exit_b));
             if a != b {
-                dda.t_drop[k] = upper(exit_a);
+                dda.t_drop[k] = dda.late(k, exit_a);
             }
         }
         dda.cell = IVec3::from_array(dda.first);
@@ -556,6 +576,23 @@ impl Dda {
         (plane - self.origin[k]) * self.inv_dir[k]
     }
 
+    /// The earliest distance at which the ray may cross the boundary along axis `k` whose
+    /// plane it crosses at the computed `t` (infinite for no plane).
+    fn early(&self, k: usize, t: f32) -> f32 {
+        match t < f32::INFINITY {
+            true => lower(t) - self.slack[k],
+            false => t,
+        }
+    }
+
+    /// The latest distance at which the ray may cross that boundary.
+    fn late(&self, k: usize, t: f32) -> f32 {
+        match t < f32::INFINITY {
+            true => upper(t) + self.slack[k],
+            false => t,
+        }
+    }
+
     /// `t_plane` and `t_join` of axis `k`, for the plane after its `last` slab.
     fn next_plane(&mut self, grid: &Grid, k: usize) {
         let last = self.last[k];
@@ -563,14 +600,14 @@ impl Dda {
             true => self.crossing(grid, k, last),
             false => f32::INFINITY,
         };
-        self.t_join[k] = lower(self.t_plane[k]);
+        self.t_join[k] = self.early(k, self.t_plane[k]);
     }
 
     /// Drops the first slab of axis `k`'s range.
     fn drop_first(&mut self, grid: &Grid, k: usize) {
         self.first[k] += self.step[k];
         self.t_drop[k] = match self.first[k] != self.last[k] {
-            true => upper(self.crossing(grid, k, self.first[k])),
+            true => self.late(k, self.crossing(grid, k, self.first[k])),
             false => f32::INFINITY,
         };
     }
@@ -616,7 +653,7 @@ impl Dda {
                 // The slab left may last until the plane just crossed, plus rounding, but
                 // adds cells only if another slab joins meanwhile: where none does, it
                 // drops at once (the common case, one event a step).
-                let left = upper(crossed);
+                let left = self.late(k, crossed);
                 if left < min3(self.t_join) {
                     self.first[k] = self.last[k];
                 } else {
