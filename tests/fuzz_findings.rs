@@ -2,7 +2,7 @@
 //! was wrong and where it was fixed.
 
 use glam::Vec3;
-use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
+use p3trace::accel::{Accel, AccelKind, AccelOptions, BvhBuild, BvhWidth, Tracer};
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::sampler::SampleGrid;
 use p3trace::render::shade::Profile;
@@ -170,6 +170,36 @@ fn the_grid_walk_allows_for_where_cell_of_puts_a_boundary() {
     assert_eq!(grid.closest(&rays[0], 0.0, 3.5), expected);
     let packet = RayPacket::new(&rays).with_t_max([3.5; 8]);
     assert_eq!(grid.closest_packet(&packet), [expected; 8]);
+}
+
+/// Open, crash-4739cb5f1bda and crash-155181915153 (2026-11-30, over 5853abf), made
+/// smaller: nine copies of a triangle in the plane x = 0 (within 1e-17) with a corner at
+/// (0, -1e9, -1e9), and a ray along x from (-1e9, -1e9, -1e9) to that corner. The
+/// triangle test gives t = 999984800, 15200 short of the plane: a hit before the
+/// triangle's own padded box (x within 1000 of 0). The midpoint BVH, 8 wide, then skips
+/// the leaves holding the other copies as `beyond` the first hit it finds, and returns
+/// another copy than brute force's tie rule (the first in the file). The triangle test's
+/// error from far away, the case that keeps triangles out of `tests/accel.rs`'s far rays.
+#[test]
+#[ignore = "open finding: a triangle's hit from 1e9 away lies before its own box"]
+fn identical_triangles_hit_from_1e9_away_tie_as_brute_force() {
+    let triangle = "p 3 -0.000000000000000017741782 -0.00000000000000000006760319 \
+                    -0.00000000000000000006760319 0.000000000000000000000000000000000000012638724 \
+                    0 -0.00000000000000000006760319 -0.00000000000000000006760319 \
+                    -1000000000 -1000000000\n";
+    let scene = parse_text(&triangle.repeat(9)).unwrap();
+    let g = &scene.geometry;
+    let ray = Ray::new(Vec3::splat(-1e9), Vec3::X);
+    let expected = Tracer::new(g, Accel::None).closest(&ray, 0.0, f32::INFINITY);
+    assert!(expected.is_some());
+    let options = AccelOptions {
+        kind: AccelKind::Bvh,
+        bvh: BvhBuild::Midpoint,
+        bvh_width: Some(BvhWidth::Eight),
+        ..AccelOptions::default()
+    };
+    let bvh = Tracer::new(g, Accel::build(g, &options).0);
+    assert_eq!(bvh.closest(&ray, 0.0, f32::INFINITY), expected);
 }
 
 /// The same scene through the default (8-wide) BVH, one ray at a time and in packets:
