@@ -28,10 +28,12 @@ pub const MAX_AXIS_CELLS: u32 = 512;
 pub struct Grid {
     bounds: Aabb,
     resolution: UVec3,
+    cell_size: Vec3,
     inv_cell_size: Vec3,
-    /// `bounds.min`, the cells' size and `resolution` as arrays, which the walk indexes by
-    /// axis (a glam vector's index is a `match`).
-    axes: Axes,
+    /// How far a plane the walk computes (`min + i * cell_size`) may lie from where
+    /// `cell_of`, which places the objects, puts that boundary: a few roundings of the
+    /// grid's coordinates.
+    plane_error: Vec3,
     /// Cell `c`'s objects are `refs[cell_start[c]..cell_start[c + 1]]` (cells x fastest).
     cell_start: Vec<u32>,
     /// Indices into `prims`.
@@ -45,18 +47,6 @@ pub struct Grid {
 /// differ by: each takes three or four roundings of numbers no larger than the grid's
 /// coordinates, so eight is ample.
 const PLANE_ROUNDING: f32 = 8.0 * f32::EPSILON;
-
-/// The grid's planes, axis by axis.
-#[derive(Clone, Copy, Debug)]
-struct Axes {
-    min: [f32; 3],
-    cell_size: [f32; 3],
-    cells: [i32; 3],
-    /// How far a plane the walk computes (`min + i * cell_size`) may lie from where
-    /// `cell_of`, which places the objects, puts that boundary: a few roundings of the
-    /// grid's coordinates.
-    plane_error: [f32; 3],
-}
 
 impl Grid {
     /// The report's grid over the bounded primitives of `geometry`, `density` its `m`,
@@ -89,13 +79,9 @@ impl Grid {
         let mut grid = Grid {
             bounds,
             resolution,
+            cell_size,
             inv_cell_size,
-            axes: Axes {
-                min: bounds.min.to_array(),
-                cell_size: cell_size.to_array(),
-                cells: resolution.as_ivec3().to_array(),
-                plane_error: (PLANE_ROUNDING * (bounds.min.abs() + bounds.max.abs())).to_array(),
-            },
+            plane_error: PLANE_ROUNDING * (bounds.min.abs() + bounds.max.abs()),
             cell_start: Vec::new(),
             refs: Vec::new(),
             prims,
@@ -152,7 +138,8 @@ impl Grid {
 
     /// Whether slab `i` along axis `k` is one of the grid's.
     fn holds(&self, k: usize, i: i32) -> bool {
-        0 <= i && i < self.axes.cells[k]
+        // Through its array: a glam vector's index is a `match`.
+        0 <= i && (i as u32) < self.resolution.as_ref()[k]
     }
 
     fn cell_index(&self, c: UVec3) -> usize {
@@ -435,7 +422,7 @@ impl Grid {
 /// when a slab joins a range, the cells it adds, that slab against the other axes'
 /// ranges, are visited. The ranges allow too for the walk's planes (`min + i *
 /// cell_size`) lying a few roundings of the grid's coordinates from the boundaries that
-/// `cell_of` placed the objects by (`Axes::plane_error`: 64 units in a grid 1e9 wide,
+/// `cell_of` placed the objects by (`Grid::plane_error`: 64 units in a grid 1e9 wide,
 /// fuzz finding crash-fb93). Where rounding is far below the cells' size, each range
 /// holds one slab, or two near a plane, and the walk is the classic one plus the cells
 /// beside an edge that it passes within rounding of.
@@ -524,7 +511,7 @@ impl Dda {
             origin: ray.origin.to_array(),
             inv_dir: inv_dir.to_array(),
             slack: [0, 1, 2].map(|k| match walks(k) {
-                true => grid.axes.plane_error[k] * inv_dir[k].abs(),
+                true => grid.plane_error[k] * inv_dir[k].abs(),
                 false => 0.0,
             }),
             first: guess,
@@ -540,10 +527,7 @@ impl Dda {
             // The slabs the ray may be in at `t_enter`: from the first whose exit may
             // come after it to the last whose entry may come before it.
             let step = dda.step[k];
-            let exit = |i: i32| match grid.holds(k, i + step) {
-                true => dda.crossing(grid, k, i),
-                false => f32::INFINITY,
-            };
+            let exit = |i: i32| dda.crossing_after(grid, k, i);
             let mut a = guess[k];
             while grid.holds(k, a - step) && dda.late(k, exit(a - step)) >= t_enter {
                 a -= step;
@@ -569,10 +553,15 @@ impl Dda {
         Some(dda)
     }
 
-    /// Where the ray crosses the plane by which it leaves slab `i` along axis `k`.
-    fn crossing(&self, grid: &Grid, k: usize, i: i32) -> f32 {
-        let plane_index = if self.step[k] > 0 { i + 1 } else { i };
-        let plane = grid.axes.min[k] + plane_index as f32 * grid.axes.cell_size[k];
+    /// Where the ray crosses the plane by which it leaves slab `i` along axis `k` for the
+    /// next slab; infinite where the grid ends there.
+    fn crossing_after(&self, grid: &Grid, k: usize, i: i32) -> f32 {
+        let step = self.step[k];
+        if !grid.holds(k, i + step) {
+            return f32::INFINITY;
+        }
+        let plane_index = i + (step > 0) as i32;
+        let plane = grid.bounds.min.as_ref()[k] + plane_index as f32 * grid.cell_size.as_ref()[k];
         (plane - self.origin[k]) * self.inv_dir[k]
     }
 
@@ -595,11 +584,7 @@ impl Dda {
 
     /// `t_plane` and `t_join` of axis `k`, for the plane after its `last` slab.
     fn next_plane(&mut self, grid: &Grid, k: usize) {
-        let last = self.last[k];
-        self.t_plane[k] = match grid.holds(k, last + self.step[k]) {
-            true => self.crossing(grid, k, last),
-            false => f32::INFINITY,
-        };
+        self.t_plane[k] = self.crossing_after(grid, k, self.last[k]);
         self.t_join[k] = self.early(k, self.t_plane[k]);
     }
 
@@ -607,7 +592,7 @@ impl Dda {
     fn drop_first(&mut self, grid: &Grid, k: usize) {
         self.first[k] += self.step[k];
         self.t_drop[k] = match self.first[k] != self.last[k] {
-            true => self.late(k, self.crossing(grid, k, self.first[k])),
+            true => self.late(k, self.crossing_after(grid, k, self.first[k])),
             false => f32::INFINITY,
         };
     }
