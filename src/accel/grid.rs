@@ -432,6 +432,8 @@ struct Dda {
     cell: IVec3,
     /// Per axis, the direction the slabs go in (0 where the ray runs along the axis).
     step: [i32; 3],
+    /// Per axis, the grid's last slab in that direction.
+    end: [i32; 3],
     origin: [f32; 3],
     inv_dir: [f32; 3],
     /// Per axis, how much later or earlier than computed the ray may cross a boundary
@@ -469,21 +471,24 @@ fn next_in_box(cell: IVec3, from: [i32; 3], to: [i32; 3], step: [i32; 3]) -> Opt
     None
 }
 
-/// The earliest distance within rounding of the computed `t`, of either sign.
+/// The earliest distance within rounding of the computed `t`, of either sign (both
+/// products taken, so that the choice is a blend rather than a branch).
 fn lower(t: f32) -> f32 {
+    let (shrunk, grown) = (widen_entry(t), widen_exit(t));
     if t >= 0.0 {
-        widen_entry(t)
+        shrunk
     } else {
-        -widen_exit(-t)
+        grown
     }
 }
 
 /// The latest distance within rounding of the computed `t`, of either sign.
 fn upper(t: f32) -> f32 {
+    let (shrunk, grown) = (widen_entry(t), widen_exit(t));
     if t >= 0.0 {
-        widen_exit(t)
+        grown
     } else {
-        -widen_entry(-t)
+        shrunk
     }
 }
 
@@ -508,10 +513,15 @@ impl Dda {
                 true => ray.dir[k].signum() as i32,
                 false => 0,
             }),
+            end: [0, 1, 2].map(|k| match ray.dir[k] > 0.0 {
+                true => grid.resolution.as_ref()[k] as i32 - 1,
+                false => 0,
+            }),
             origin: ray.origin.to_array(),
             inv_dir: inv_dir.to_array(),
             slack: [0, 1, 2].map(|k| match walks(k) {
-                true => grid.plane_error[k] * inv_dir[k].abs(),
+                // Finite, so that an infinite crossing (no plane) stays infinite.
+                true => (grid.plane_error[k] * inv_dir[k].abs()).min(f32::MAX),
                 false => 0.0,
             }),
             first: guess,
@@ -556,11 +566,10 @@ impl Dda {
     /// Where the ray crosses the plane by which it leaves slab `i` along axis `k` for the
     /// next slab; infinite where the grid ends there.
     fn crossing_after(&self, grid: &Grid, k: usize, i: i32) -> f32 {
-        let step = self.step[k];
-        if !grid.holds(k, i + step) {
+        if i == self.end[k] {
             return f32::INFINITY;
         }
-        let plane_index = i + (step > 0) as i32;
+        let plane_index = i + (self.step[k] > 0) as i32;
         let plane = grid.bounds.min.as_ref()[k] + plane_index as f32 * grid.cell_size.as_ref()[k];
         (plane - self.origin[k]) * self.inv_dir[k]
     }
@@ -568,18 +577,12 @@ impl Dda {
     /// The earliest distance at which the ray may cross the boundary along axis `k` whose
     /// plane it crosses at the computed `t` (infinite for no plane).
     fn early(&self, k: usize, t: f32) -> f32 {
-        match t < f32::INFINITY {
-            true => lower(t) - self.slack[k],
-            false => t,
-        }
+        lower(t) - self.slack[k]
     }
 
     /// The latest distance at which the ray may cross that boundary.
     fn late(&self, k: usize, t: f32) -> f32 {
-        match t < f32::INFINITY {
-            true => upper(t) + self.slack[k],
-            false => t,
-        }
+        upper(t) + self.slack[k]
     }
 
     /// `t_plane` and `t_join` of axis `k`, for the plane after its `last` slab.
@@ -610,7 +613,27 @@ impl Dda {
 
     /// Moves to the next cell to visit; `false` when the walk is over (no slab may join
     /// before `t_end`).
+    #[inline]
     fn advance(&mut self, grid: &Grid) -> bool {
+        if self.batch.is_some() || self.first != self.last {
+            return self.advance_spread(grid);
+        }
+        // Every range holds one slab (the common case): the classic step to the one cell
+        // of the slab that joins next.
+        let k = argmin(self.t_join);
+        let join = self.t_join[k];
+        if !self.joins_in_time(join) {
+            return false;
+        }
+        self.join_next(grid, k, join);
+        self.cell = IVec3::from_array(self.last);
+        true
+    }
+
+    /// [`Dda::advance`] where a batch of cells is being visited or a range holds several
+    /// slabs.
+    #[inline(never)]
+    fn advance_spread(&mut self, grid: &Grid) -> bool {
         if let Some((from, to)) = self.batch {
             if let Some(next) = next_in_box(self.cell, from, to, self.step) {
                 self.cell = next;
@@ -626,25 +649,10 @@ impl Dda {
                 self.drop_first(grid, argmin(self.t_drop));
                 continue;
             }
-            if !(join < f32::INFINITY && join <= widen_exit(self.t_end)) {
+            if !self.joins_in_time(join) {
                 return false;
             }
-            let crossed = self.t_plane[k];
-            let single = self.first[k] == self.last[k];
-            self.last[k] += self.step[k];
-            self.next_plane(grid, k);
-            self.t_joined = join;
-            if single {
-                // The slab left may last until the plane just crossed, plus rounding, but
-                // adds cells only if another slab joins meanwhile: where none does, it
-                // drops at once (the common case, one event a step).
-                let left = self.late(k, crossed);
-                if left < min3(self.t_join) {
-                    self.first[k] = self.last[k];
-                } else {
-                    self.t_drop[k] = left;
-                }
-            }
+            self.join_next(grid, k, join);
             if drop == f32::INFINITY {
                 // Every range held one slab: the one cell of the slab that joined.
                 self.cell = IVec3::from_array(self.last);
@@ -655,6 +663,31 @@ impl Dda {
             self.cell = IVec3::from_array(from);
             self.batch = (from != to).then_some((from, to));
             return true;
+        }
+    }
+
+    /// Whether a slab joining at `join` may still hold the ray before the walk ends.
+    fn joins_in_time(&self, join: f32) -> bool {
+        join < f32::INFINITY && join <= widen_exit(self.t_end)
+    }
+
+    /// Adds the next slab of axis `k` to its range, the ray crossing into it from `join`.
+    fn join_next(&mut self, grid: &Grid, k: usize, join: f32) {
+        let crossed = self.t_plane[k];
+        let single = self.first[k] == self.last[k];
+        self.last[k] += self.step[k];
+        self.next_plane(grid, k);
+        self.t_joined = join;
+        if single {
+            // The slab left may last until the plane just crossed, plus rounding, but
+            // adds cells only if another slab joins meanwhile: where none does, it
+            // drops at once (the common case, one event a step).
+            let left = self.late(k, crossed);
+            if left < min3(self.t_join) {
+                self.first[k] = self.last[k];
+            } else {
+                self.t_drop[k] = left;
+            }
         }
     }
 }
