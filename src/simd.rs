@@ -88,6 +88,41 @@ impl F32x8 {
         F32x8(self.0.copysign(sign.0))
     }
 
+    /// The smallest lane, by [`F32x8::min`] between halves, then quarters, then pairs:
+    /// where no lane is NaN, the least value (either zero where `-0.0` and `0.0` tie), as
+    /// a fold of `f32::min` over the lanes gives.
+    #[inline]
+    pub fn min_lane(self) -> f32 {
+        self.reduce(F32x8::min)
+    }
+
+    /// The largest lane, as [`F32x8::min_lane`] with [`F32x8::max`].
+    #[inline]
+    pub fn max_lane(self) -> f32 {
+        self.reduce(F32x8::max)
+    }
+
+    /// `combine` of the lanes pairwise, by halves, quarters and pairs (shuffles).
+    #[inline(always)]
+    fn reduce(self, combine: impl Fn(F32x8, F32x8) -> F32x8) -> f32 {
+        let a = self.to_array();
+        let halves = combine(
+            self,
+            F32x8::from_array([a[4], a[5], a[6], a[7], a[0], a[1], a[2], a[3]]),
+        );
+        let b = halves.to_array();
+        let quarters = combine(
+            halves,
+            F32x8::from_array([b[2], b[3], b[0], b[1], b[6], b[7], b[4], b[5]]),
+        );
+        let c = quarters.to_array();
+        combine(
+            quarters,
+            F32x8::from_array([c[1], c[0], c[3], c[2], c[5], c[4], c[7], c[6]]),
+        )
+        .to_array()[0]
+    }
+
     /// Ordered comparisons: a NaN lane compares false, as in scalar Rust.
     #[inline]
     pub fn lt(self, rhs: Self) -> Mask8 {

@@ -413,6 +413,26 @@ proptest! {
         }
     }
 
+    /// `min_lane` and `max_lane` give what a fold of `f32::min` or `f32::max` over the
+    /// lanes gives, wherever no lane is NaN (a zero of either sign where they tie).
+    #[test]
+    fn min_and_max_lane_equal_a_fold(
+        lanes in prop::array::uniform8(coord().prop_filter("no NaN", |t| !t.is_nan())),
+    ) {
+        let packed = F32x8::from_array(lanes);
+        prop_assert_eq!(packed.min_lane(), lanes.iter().copied().fold(INF, f32::min));
+        prop_assert_eq!(packed.max_lane(), lanes.iter().copied().fold(-INF, f32::max));
+    }
+
+    /// `beyond8` answers each lane as `beyond`.
+    #[test]
+    fn beyond8_equals_scalar(entry in coord(), limits in prop::array::uniform8(coord())) {
+        let lanes = intersect::beyond8(F32x8::splat(entry), F32x8::from_array(limits)).bitmask();
+        for (k, &limit) in limits.iter().enumerate() {
+            prop_assert_eq!(lanes >> k & 1 == 1, intersect::beyond(entry, limit), "lane {}", k);
+        }
+    }
+
     /// `RayPacket::traceable` answers each lane as `Ray::is_traceable`, odd rays included.
     #[test]
     fn traceable_lanes_equal_scalar(p in packet()) {

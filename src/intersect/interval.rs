@@ -72,6 +72,12 @@ pub fn beyond(entry: f32, limit: f32) -> bool {
     entry > widen_exit(limit)
 }
 
+/// [`beyond`] lane by lane: the lanes whose `limit` the entry `entry` lies beyond.
+#[inline]
+pub fn beyond8(entry: F32x8, limit: F32x8) -> Mask8 {
+    entry.gt(widen_exit8(limit))
+}
+
 /// [`widen_exit`] lane by lane.
 #[inline(always)]
 fn widen_exit8(t: F32x8) -> F32x8 {
@@ -184,11 +190,30 @@ impl BoxRay8 {
     }
 
     /// The lanes `lanes` as one [`RayRange`], if their directions agree in sign.
+    #[inline]
     pub fn range(&self, lanes: u8) -> Option<RayRange> {
-        RayRange::of_lanes(
-            std::array::from_fn(|k| self.origin.lane(k)),
-            std::array::from_fn(|k| self.inv_dir.lane(k)),
-            lanes,
+        if lanes == 0 {
+            return None;
+        }
+        let keep = Mask8::from_bitmask(lanes);
+        let (high, low) = (F32x8::splat(f32::INFINITY), F32x8::splat(f32::NEG_INFINITY));
+        let least = |v: Vec3x8| {
+            Vec3::new(
+                keep.select(v.x, high).min_lane(),
+                keep.select(v.y, high).min_lane(),
+                keep.select(v.z, high).min_lane(),
+            )
+        };
+        let most = |v: Vec3x8| {
+            Vec3::new(
+                keep.select(v.x, low).max_lane(),
+                keep.select(v.y, low).max_lane(),
+                keep.select(v.z, low).max_lane(),
+            )
+        };
+        RayRange::from_bounds(
+            [least(self.origin), most(self.origin)],
+            [least(self.inv_dir), most(self.inv_dir)],
         )
     }
 
@@ -232,17 +257,10 @@ pub struct RayRange {
 }
 
 impl RayRange {
-    /// The range of the rays `origin` and (clamped) `inv_dir` of the lanes in `lanes`, or
-    /// `None` when on some axis their directions differ in sign or no lane is given.
-    fn of_lanes(origin: [Vec3; 8], inv_dir: [Vec3; 8], lanes: u8) -> Option<Self> {
-        let mut given = (0..8).filter(|k| lanes & (1 << k) != 0);
-        let first = given.next()?;
-        let (mut o_lo, mut o_hi) = (origin[first], origin[first]);
-        let (mut inv_lo, mut inv_hi) = (inv_dir[first], inv_dir[first]);
-        for k in given {
-            (o_lo, o_hi) = (o_lo.min(origin[k]), o_hi.max(origin[k]));
-            (inv_lo, inv_hi) = (inv_lo.min(inv_dir[k]), inv_hi.max(inv_dir[k]));
-        }
+    /// The range of rays whose origins lie within `[o_lo, o_hi]` and whose (clamped)
+    /// inverse directions lie within `[inv_lo, inv_hi]`, or `None` when on some axis the
+    /// directions differ in sign.
+    fn from_bounds([o_lo, o_hi]: [Vec3; 2], [inv_lo, inv_hi]: [Vec3; 2]) -> Option<Self> {
         let mut range = RayRange {
             entry_origin: o_hi,
             exit_origin: o_lo,

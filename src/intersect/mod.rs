@@ -32,7 +32,9 @@ mod triangle;
 pub use aabb::{aabb, aabb_leaf, aabb_normal, aabb_packet, BoxPack8, Boxes};
 pub use bounds::Aabb;
 pub use cone::{cone, cone_normal, cone_packet, Cones};
-pub use interval::{beyond, widen_entry, widen_exit, BoxRay, BoxRay8, Intervals8, RayRange};
+pub use interval::{
+    beyond, beyond8, widen_entry, widen_exit, BoxRay, BoxRay8, Intervals8, RayRange,
+};
 pub use moving_sphere::MovingSpheres;
 pub use plane::{plane, plane_packet, Planes};
 pub use sphere::{

@@ -7,10 +7,10 @@ use super::node::{ChildRef, Node8, LEAF, WIDTH};
 use super::{Bvh8, STACK_SIZE};
 use crate::accel::hit::{for_lanes, ClosestHit};
 use crate::accel::stack::Stack;
-use crate::intersect::{beyond, BoxRay8, RayRange};
+use crate::intersect::{beyond8, BoxRay8, RayRange};
 use crate::ray::RayPacket;
 use crate::scene::Geometry;
-use crate::simd::F32x8;
+use crate::simd::{F32x8, Mask8};
 
 /// A packet whose lanes in a subtree drop to this many finishes it one ray at a time.
 const SINGLE_RAY_LANES: u32 = 2;
@@ -45,8 +45,7 @@ impl Bvh8 {
         stack.push((0, active, t_min));
         while let Some((child, lanes, t_entry)) = stack.pop() {
             // Beyond every lane's closest hit: nothing closer inside (ties are visited).
-            let farthest = limit.to_array();
-            if (0..8).all(|k| lanes & (1 << k) == 0 || beyond(t_entry, farthest[k])) {
+            if lanes & !beyond8(F32x8::splat(t_entry), limit).bitmask() == 0 {
                 continue;
             }
             if child & LEAF != 0 || lanes.count_ones() <= SINGLE_RAY_LANES {
@@ -79,15 +78,14 @@ impl Bvh8 {
             let mut entered = [(0u32, 0u8, 0f32); WIDTH];
             let mut count = 0;
             let candidates = candidates(node, range.as_ref(), t_min, range_limit);
+            let kept = Mask8::from_bitmask(lanes);
             for_lanes(candidates, |c| {
                 let (min, max) = node.boxes.corners(c);
                 let intervals = box_rays.interval(min, max, lanes_t_min, limit);
-                let hit = intervals.hit.bitmask() & lanes;
-                if hit != 0 {
-                    let t = intervals.entry.to_array();
-                    let mut nearest = f32::INFINITY;
-                    for_lanes(hit, |k| nearest = nearest.min(t[k]));
-                    entered[count] = (node.child[c], hit, nearest);
+                let hit = intervals.hit & kept;
+                if hit.any() {
+                    let nearest = hit.select(intervals.entry, F32x8::splat(f32::INFINITY));
+                    entered[count] = (node.child[c], hit.bitmask(), nearest.min_lane());
                     count += 1;
                 }
             });
@@ -150,12 +148,11 @@ impl Bvh8 {
     }
 }
 
-/// The largest of `t`'s lanes in `lanes`.
+/// The largest of `t`'s lanes in `lanes` (at least one).
 fn largest(t: F32x8, lanes: u8) -> f32 {
-    let t = t.to_array();
-    let mut largest = f32::NEG_INFINITY;
-    for_lanes(lanes, |k| largest = largest.max(t[k]));
-    largest
+    Mask8::from_bitmask(lanes)
+        .select(t, F32x8::splat(f32::NEG_INFINITY))
+        .max_lane()
 }
 
 /// The used children of `node` that some ray of `range` may enter (all of them without
