@@ -215,7 +215,7 @@ impl Bvh8 {
 
     /// The primitive in slot `slot` of the pack leaf `child` against the lanes `lanes` of
     /// `packet` within `(t_min, t_max)` (spheres with `u` and `v` zero), and its id.
-    #[inline]
+    #[inline(always)]
     fn pack_slot(
         &self,
         packet: &RayPacket,
