@@ -524,3 +524,29 @@ fn crash_6c89_agrees_with_the_course_profile() {
 fn crash_b88a_agrees_with_the_standard_profile() {
     assert_agrees(&CRASH_B88A, Profile::Standard);
 }
+
+/// accel_agreement's crash-c9e9267ab426 (2026-11-30, over 8f10f18): one sphere between
+/// two planes, lit by an area light 1e9 away, seen with depth of field. The standard
+/// profile gives one image with every structure.
+const CRASH_C9E9: Finding = Finding {
+    text: "pl -1000000000 0 4 0 4 4 4 4 4\nal 4 4 0 -0.5 1000000000 -0.5 0 0\n\
+           pl 1 0.5 0 6.5 6 4 4 0 1000000000\ns -0.5 3.5 3.5 3.5\n",
+    from: Vec3::new(0.5, 3.5, 4.0),
+    at: Vec3::new(4.5, 1e9, 4.5),
+    up: Vec3::new(-1e9, 4.5, 4.5),
+    angle: 78.0,
+};
+
+#[test]
+fn crash_c9e9_agrees_with_the_standard_profile() {
+    assert_agrees(&CRASH_C9E9, Profile::Standard);
+}
+
+/// With the course profile, brute force, the grid and the BVH give different images of
+/// crash-c9e9's scene; so they did before the session that found it (ca400d3), whose
+/// changes were to packet traversal and the grid's step, not to what either answers.
+#[test]
+#[ignore = "open finding: with the course profile the structures and brute force differ"]
+fn crash_c9e9_agrees_with_the_course_profile() {
+    assert_agrees(&CRASH_C9E9, Profile::Course);
+}
