@@ -162,9 +162,7 @@ impl Bvh8 {
         }
         blocked
     }
-}
 
-impl Bvh8 {
     /// The primitives of the pack leaf `child` against the lanes `lanes` of `packet`, one
     /// primitive against every lane at a time; each lane keeps its winner, as
     /// [`Bvh8::closest_in_leaf`] has it keep (the tie rule does not depend on order).
