@@ -569,7 +569,8 @@ fn crash_81b9_agrees_with_the_standard_profile() {
 }
 
 /// With the course profile (the textbook sphere roots, far off from 1e9 away) the grid
-/// and the BVH differ from brute force on crash-81b9's scene, as on crash-37bf's.
+/// and the BVH differ from brute force on crash-81b9's scene, as on crash-37bf's; so
+/// they did at ca400d3, before the changes of the session that found it.
 #[test]
 #[ignore = "open finding: with the course profile the structures and brute force differ"]
 fn crash_81b9_agrees_with_the_course_profile() {
