@@ -196,21 +196,17 @@ impl BoxRay8 {
             return None;
         }
         let keep = Mask8::from_bitmask(lanes);
-        let (high, low) = (F32x8::splat(f32::INFINITY), F32x8::splat(f32::NEG_INFINITY));
-        let least = |v: Vec3x8| {
+        // Per axis, `pick` of the kept lanes, the others filled with what it ignores.
+        let reduce = |v: Vec3x8, fill: f32, pick: fn(F32x8) -> f32| {
+            let fill = F32x8::splat(fill);
             Vec3::new(
-                keep.select(v.x, high).min_lane(),
-                keep.select(v.y, high).min_lane(),
-                keep.select(v.z, high).min_lane(),
+                pick(keep.select(v.x, fill)),
+                pick(keep.select(v.y, fill)),
+                pick(keep.select(v.z, fill)),
             )
         };
-        let most = |v: Vec3x8| {
-            Vec3::new(
-                keep.select(v.x, low).max_lane(),
-                keep.select(v.y, low).max_lane(),
-                keep.select(v.z, low).max_lane(),
-            )
-        };
+        let least = |v| reduce(v, f32::INFINITY, F32x8::min_lane);
+        let most = |v| reduce(v, f32::NEG_INFINITY, F32x8::max_lane);
         RayRange::from_bounds(
             [least(self.origin), most(self.origin)],
             [least(self.inv_dir), most(self.inv_dir)],

@@ -38,9 +38,7 @@ impl Bvh8 {
         let inv_dir = packet.inv_dir_lanes();
         let box_rays = BoxRay8::new(packet);
         let lanes_t_min = F32x8::splat(t_min);
-        let limits =
-            |closest: &[ClosestHit; 8]| F32x8::from_array(closest.each_ref().map(|c| c.limit()));
-        let mut limit = limits(closest);
+        let mut limit = lanes_of(closest, ClosestHit::limit);
         let range = box_rays.range(active);
         // The lanes' limits when the walk starts: as hits bring them closer, the lanes'
         // own box tests cull by distance.
@@ -54,7 +52,7 @@ impl Bvh8 {
             }
             if packs_fewer(child, lanes) {
                 self.closest_in_pack(packet, child, lanes, closest);
-                limit = limits(closest);
+                limit = lanes_of(closest, ClosestHit::limit);
                 continue;
             }
             if child & LEAF != 0 || lanes.count_ones() <= SINGLE_RAY_LANES {
@@ -79,7 +77,7 @@ impl Bvh8 {
                         );
                     }
                 });
-                limit = limits(closest);
+                limit = lanes_of(closest, ClosestHit::limit);
                 continue;
             }
             let node = &self.nodes[child as usize];
@@ -173,9 +171,7 @@ impl Bvh8 {
         lanes: u8,
         closest: &mut [ClosestHit; 8],
     ) {
-        let bounds =
-            |closest: &[ClosestHit; 8]| F32x8::from_array(closest.each_ref().map(|c| c.bound()));
-        let mut bound = bounds(closest);
+        let mut bound = lanes_of(closest, ClosestHit::bound);
         let (_, count, _) = leaf_parts(child);
         for slot in 0..count {
             let (hits, prim) = self.pack_slot(packet, child, slot, bound, lanes);
@@ -190,7 +186,7 @@ impl Bvh8 {
                         v: v[k],
                     })
                 });
-                bound = bounds(closest);
+                bound = lanes_of(closest, ClosestHit::bound);
             }
         }
     }
@@ -251,10 +247,16 @@ impl Bvh8 {
 /// has lanes: then testing each primitive against all lanes makes fewer 8-lane tests than
 /// testing each lane against every slot of the pack.
 fn packs_fewer(child: ChildRef, lanes: u8) -> bool {
+    if child & LEAF == 0 {
+        return false;
+    }
     let (kind, count, _) = leaf_parts(child);
-    child & LEAF != 0
-        && (kind == TRIANGLES || kind == SPHERES)
-        && count < lanes.count_ones() as usize
+    (kind == TRIANGLES || kind == SPHERES) && count < lanes.count_ones() as usize
+}
+
+/// `distance` of each lane's closest hit so far, as eight lanes.
+fn lanes_of(closest: &[ClosestHit; 8], distance: impl Fn(&ClosestHit) -> f32) -> F32x8 {
+    F32x8::from_array(closest.each_ref().map(distance))
 }
 
 /// The largest of `t`'s lanes in `lanes` (at least one).
