@@ -263,7 +263,7 @@ impl<'a> Shader<'a> {
             let mirror = (ray.dir - 2.0 * ray.dir.dot(nf) * nf).normalize();
             let sample = sample.spawn(0);
             let ray = Ray {
-                origin: surface.origin(nf),
+                origin: surface.outward,
                 dir: self.fuzz(mirror, nf, &sample.rng),
                 time: ray.time,
             };
@@ -333,12 +333,15 @@ impl<'a> Shader<'a> {
         };
         let inside = ray.dir.dot(normal) > 0.0;
         let nf = if inside { -normal } else { normal };
-        Surface {
+        let mut surface = Surface {
             p,
             nf,
             inside,
             error,
-        }
+            outward: p,
+        };
+        surface.outward = surface.origin(nf);
+        surface
     }
 
     /// A reflected direction: the `mirror` direction, or with roughness g > 0 the
@@ -403,7 +406,7 @@ impl<'a> Shader<'a> {
         if nf.dot(light.position - p) <= 0.0 {
             return None;
         }
-        let origin = surface.origin(nf);
+        let origin = surface.outward;
         let to_light = light.position - origin;
         let distance = to_light.length();
         let dir = to_light / distance;
@@ -435,6 +438,9 @@ pub(super) struct Surface {
     /// The bound of `p`'s error on each axis; `None` with the `course` profile, whose rays
     /// start [`EPS`] off the surface.
     error: Option<Vec3>,
+    /// `origin(nf)`, where reflected and shadow rays start: one hit's shadow rays to
+    /// every light and its reflected ray share it.
+    outward: Vec3,
 }
 
 impl Surface {
