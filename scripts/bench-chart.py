@@ -224,6 +224,7 @@ def draw(rows, apis, title, out, labels):
         "p3trace-best": "#1f4e9c",
         "p3trace-single": "#9ab8e6",
         "p3trace-packet8": "#5b86c9",
+        "p3trace-stream": "#c9d9f2",
         "embree-best": "#c8560f",
         "embree-single": "#f7c79a",
         "embree-packet8": "#f1a45f",

@@ -4,7 +4,7 @@
 
 use std::time::{Duration, Instant};
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::accel::Tracer;
@@ -20,6 +20,8 @@ pub const OFFSET: f64 = 1e-4;
 const CHUNK: usize = 128;
 /// An idle lane of a block.
 const IDLE: u32 = u32::MAX;
+/// The end points that [`Path::Stream`] groups a stream's occlusion rays by, at most.
+const ENDS: usize = 8;
 
 /// One of the protocol's ray sets.
 #[derive(Clone, Debug)]
@@ -43,6 +45,11 @@ pub enum Path {
     Single,
     /// A block of eight rays as one packet.
     Packet,
+    /// The blocks that a thread takes at a time ([`CHUNK`] of them) as one stream, whose
+    /// occlusion rays are regrouped by their end point before they are traced as packets
+    /// of eight (as Embree's stream API sorts an incoherent stream by direction), the
+    /// regrouping timed with the tracing.
+    Stream,
 }
 
 /// Eight consecutive rays per block.
@@ -219,6 +226,7 @@ pub fn run(
     let paths = [
         ("p3trace-single", Path::Single),
         ("p3trace-packet8", Path::Packet),
+        ("p3trace-stream", Path::Stream),
     ];
     let mut first: Vec<SetResult> = Vec::new();
     for &n in thread_counts {
@@ -266,21 +274,8 @@ pub fn trace_set(
     let mut answers = vec![[f32::NAN; 8]; set.blocks.len()];
     let mut result: Option<SetResult> = None;
     for pass in 1..=reps.max(1) {
-        answers.fill([f32::NAN; 8]);
         let start = Instant::now();
-        pool.install(|| {
-            answers
-                .par_chunks_mut(CHUNK)
-                .zip(set.blocks.par_chunks(CHUNK))
-                .for_each(|(answers, blocks)| {
-                    for (answer, block) in answers.iter_mut().zip(blocks) {
-                        *answer = match path {
-                            Path::Single => trace_single(tracer, set, block),
-                            Path::Packet => trace_packet(tracer, set, block),
-                        };
-                    }
-                });
-        });
+        trace_pass(tracer, set, path, pool, &mut answers);
         let elapsed = start.elapsed();
         let (hits, tsum) = checksum(&in_ray_order(set, &answers));
         match &mut result {
@@ -301,6 +296,33 @@ pub fn trace_set(
         }
     }
     Ok(result.expect("at least one pass ran"))
+}
+
+/// One pass over `set` along `path` on `pool`: the answer of each lane of each block.
+fn trace_pass(
+    tracer: &Tracer,
+    set: &RaySet,
+    path: Path,
+    pool: &rayon::ThreadPool,
+    answers: &mut [[f32; 8]],
+) {
+    answers.fill([f32::NAN; 8]);
+    pool.install(|| {
+        answers
+            .par_chunks_mut(CHUNK)
+            .zip(set.blocks.par_chunks(CHUNK))
+            .for_each(|(answers, blocks)| match path {
+                Path::Single | Path::Packet => {
+                    for (answer, block) in answers.iter_mut().zip(blocks) {
+                        *answer = match path {
+                            Path::Single => trace_single(tracer, set, block),
+                            _ => trace_packet(tracer, set, block),
+                        };
+                    }
+                }
+                Path::Stream => trace_stream(tracer, set, blocks, answers),
+            });
+    });
 }
 
 /// The answer of each lane of `block`, one ray at a time.
@@ -337,6 +359,80 @@ fn trace_packet(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> [f32; 8] {
     } else {
         let hits = tracer.closest_packet(&packet);
         hits.map(|h| h.map_or(-1.0, |h| h.t))
+    }
+}
+
+/// The answers of up to [`CHUNK`] `blocks` as one stream. Occlusion rays are grouped by
+/// where they end (rays within a hair of one another's end, up to [`ENDS`] such points,
+/// the rest after them), in block order within each group, and traced as packets of
+/// eight: shadow rays towards one light then share packets, as the renderer packs them,
+/// where the set has each hit's rays to every light side by side. Closest-hit rays are
+/// traced block by block as [`Path::Packet`] does: regrouping them by direction cost
+/// more than it saved (BENCHMARKS.md).
+fn trace_stream(tracer: &Tracer, set: &RaySet, blocks: &[[u32; 8]], answers: &mut [[f32; 8]]) {
+    if !set.occlusion {
+        for (answer, block) in answers.iter_mut().zip(blocks) {
+            *answer = trace_packet(tracer, set, block);
+        }
+        return;
+    }
+    // Each place (8 block + lane) of the stream: its ray's group (ENDS for the rest).
+    let places = blocks.as_flattened();
+    let mut group = [0u8; 8 * CHUNK];
+    let mut ends = [Vec3::ZERO; ENDS];
+    let mut tolerance = [0f32; ENDS];
+    let mut count = [0u16; ENDS + 1];
+    let mut found = 0;
+    for (place, &i) in places.iter().enumerate() {
+        let g = if i == IDLE {
+            ENDS
+        } else {
+            let end = set.rays[i as usize].at(set.t_max[i as usize]);
+            let near = |g: &usize| (end - ends[*g]).abs().max_element() <= tolerance[*g];
+            match (0..found).find(near) {
+                Some(g) => g,
+                None if found < ENDS && end.is_finite() => {
+                    ends[found] = end;
+                    tolerance[found] = 1e-4 * end.abs().max_element().max(1.0);
+                    found += 1;
+                    found - 1
+                }
+                None => ENDS,
+            }
+        };
+        group[place] = g as u8;
+        count[g] += 1;
+    }
+    if found <= 1 {
+        // One end point at most: the blocks are grouped already.
+        for (answer, block) in answers.iter_mut().zip(blocks) {
+            *answer = trace_packet(tracer, set, block);
+        }
+        return;
+    }
+    // The stream's rays by group (idle lanes last), and where each answer goes; each
+    // group's first place, then its next free one.
+    let mut next = [0u16; ENDS + 1];
+    for g in 1..=ENDS {
+        next[g] = next[g - 1] + count[g - 1];
+    }
+    let mut rays = [IDLE; 8 * CHUNK];
+    let mut to = [0u16; 8 * CHUNK];
+    for (place, (&g, &i)) in group.iter().zip(places).enumerate() {
+        let slot = &mut next[g as usize];
+        (rays[*slot as usize], to[*slot as usize]) = (i, place as u16);
+        *slot += 1;
+    }
+    let answers = answers.as_flattened_mut();
+    for (rays, to) in rays[..places.len()].chunks_exact(8).zip(to.chunks_exact(8)) {
+        if rays[0] == IDLE {
+            // Idle lanes come last: the rest are idle too.
+            break;
+        }
+        let answer = trace_packet(tracer, set, rays.try_into().expect("eight lanes"));
+        for (&place, a) in to.iter().zip(answer) {
+            answers[place as usize] = a;
+        }
     }
 }
 
@@ -454,9 +550,17 @@ mod tests {
         let sets = ray_sets(&scene, &tracer);
         let mut lines = Vec::new();
         run(&tracer, &sets, &[1, 2], 1, |l| lines.push(l)).unwrap();
-        assert_eq!(lines.len(), 3 * 3 * 2);
-        let apis: Vec<&str> = lines[..3].iter().map(|l| l.api).collect();
-        assert_eq!(apis, ["p3trace-single", "p3trace-packet8", "p3trace-best"]);
+        assert_eq!(lines.len(), 3 * 4 * 2);
+        let apis: Vec<&str> = lines[..4].iter().map(|l| l.api).collect();
+        assert_eq!(
+            apis,
+            [
+                "p3trace-single",
+                "p3trace-packet8",
+                "p3trace-stream",
+                "p3trace-best"
+            ]
+        );
         // The printed line has the protocol's seven fields.
         let text = lines[0].to_string();
         let fields: Vec<&str> = text.split_whitespace().collect();
@@ -482,6 +586,50 @@ mod tests {
         }
         assert!(covers(consecutive_blocks(13), 13));
         assert_eq!(tile_blocks(8, 2)[1], [4, 5, 6, 7, 12, 13, 14, 15]);
+    }
+
+    /// Ten lights, more end points than a stream groups by, and spheres that shadow one
+    /// another: every path gives every ray of every set the same answer.
+    #[test]
+    fn streams_answer_as_single_rays_and_packets() {
+        let mut text = String::from(
+            "v\nfrom 0 0 8\nat 0 0 0\nup 0 1 0\nangle 50\nhither 0.01\nresolution 64 48\n",
+        );
+        for k in 0..10 {
+            let a = k as f32 * 0.6;
+            text += &format!("l {} {} 6\n", 6.0 * a.cos(), 6.0 * a.sin());
+        }
+        text += "s 0 0 0 1\ns 1.5 0.5 1.5 0.5\ns -1.2 -0.8 1.2 0.4\ns 0.3 -1.6 0.8 0.3\n";
+        let scene = parse_text(&text).unwrap();
+        let tracer = Tracer::new(&scene.geometry, Accel::None);
+        let sets = ray_sets(&scene, &tracer);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let answers = |set: &RaySet, path| {
+            let mut answers = vec![[f32::NAN; 8]; set.blocks.len()];
+            trace_pass(&tracer, set, path, &pool, &mut answers);
+            in_ray_order(set, &answers)
+        };
+        for set in &sets {
+            let single = answers(set, Path::Single);
+            assert!(
+                single.iter().all(|t| !t.is_nan()),
+                "{}: every ray answered",
+                set.name
+            );
+            for path in [Path::Packet, Path::Stream] {
+                assert!(answers(set, path) == single, "{} {path:?}", set.name);
+            }
+        }
+        let shadow = answers(&sets[1], Path::Single);
+        let blocked = shadow.iter().filter(|&&t| t == 0.0).count();
+        assert!(
+            blocked > 1000 && blocked < shadow.len() / 2,
+            "some shadow rays blocked, most not: {blocked} of {}",
+            shadow.len()
+        );
     }
 
     #[test]

@@ -644,8 +644,8 @@ fn render_and_bench_write_their_statistics_as_json() {
         .collect();
     assert_eq!(
         lines.len(),
-        3 * 3 * 2,
-        "three sets, three paths, two thread counts"
+        3 * 4 * 2,
+        "three sets, four rows (three paths and the best), two thread counts"
     );
     assert_eq!(lines.len(), text.len());
     for (line, text) in lines.iter().zip(&text) {
