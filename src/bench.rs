@@ -312,17 +312,22 @@ fn trace_pass(
             .par_chunks_mut(CHUNK)
             .zip(set.blocks.par_chunks(CHUNK))
             .for_each(|(answers, blocks)| match path {
-                Path::Single | Path::Packet => {
-                    for (answer, block) in answers.iter_mut().zip(blocks) {
-                        *answer = match path {
-                            Path::Single => trace_single(tracer, set, block),
-                            _ => trace_packet(tracer, set, block),
-                        };
-                    }
-                }
+                Path::Single => each_block(blocks, answers, |b| trace_single(tracer, set, b)),
+                Path::Packet => each_block(blocks, answers, |b| trace_packet(tracer, set, b)),
                 Path::Stream => trace_stream(tracer, set, blocks, answers),
             });
     });
+}
+
+/// The answers of `blocks`, each block by `trace`.
+fn each_block(
+    blocks: &[[u32; 8]],
+    answers: &mut [[f32; 8]],
+    trace: impl Fn(&[u32; 8]) -> [f32; 8],
+) {
+    for (answer, block) in answers.iter_mut().zip(blocks) {
+        *answer = trace(block);
+    }
 }
 
 /// The answer of each lane of `block`, one ray at a time.
@@ -363,29 +368,32 @@ fn trace_packet(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> [f32; 8] {
 }
 
 /// The answers of up to [`CHUNK`] `blocks` as one stream. Occlusion rays are grouped by
-/// where they end (rays within a hair of one another's end, up to [`ENDS`] such points,
-/// the rest after them), in block order within each group, and traced as packets of
-/// eight: shadow rays towards one light then share packets, as the renderer packs them,
-/// where the set has each hit's rays to every light side by side. Closest-hit rays are
-/// traced block by block as [`Path::Packet`] does: regrouping them by direction cost
-/// more than it saved (BENCHMARKS.md).
+/// the point they end at (ends within 1e-4 of their coordinates' magnitude count as one,
+/// up to [`ENDS`] such points, the other rays after them), in block order within each
+/// group, and traced as packets of eight: shadow rays towards one light then share
+/// packets, as the renderer packs them, where the set has each hit's rays to every light
+/// side by side. Closest-hit rays are traced block by block as [`Path::Packet`] does:
+/// regrouping them by direction cost more than it saved (BENCHMARKS.md).
 fn trace_stream(tracer: &Tracer, set: &RaySet, blocks: &[[u32; 8]], answers: &mut [[f32; 8]]) {
+    let packets = |blocks: &[[u32; 8]], answers: &mut [[f32; 8]]| {
+        each_block(blocks, answers, |b| trace_packet(tracer, set, b))
+    };
     if !set.occlusion {
-        for (answer, block) in answers.iter_mut().zip(blocks) {
-            *answer = trace_packet(tracer, set, block);
-        }
-        return;
+        return packets(blocks, answers);
     }
-    // Each place (8 block + lane) of the stream: its ray's group (ENDS for the rest).
+    // Each place (8 block + lane) of the stream: its ray's group, the end point it
+    // shares, or OTHER, or IDLE_LANES for the blocks' idle lanes.
+    const OTHER: usize = ENDS;
+    const IDLE_LANES: usize = ENDS + 1;
     let places = blocks.as_flattened();
     let mut group = [0u8; 8 * CHUNK];
     let mut ends = [Vec3::ZERO; ENDS];
     let mut tolerance = [0f32; ENDS];
-    let mut count = [0u16; ENDS + 1];
+    let mut count = [0u16; ENDS + 2];
     let mut found = 0;
     for (place, &i) in places.iter().enumerate() {
         let g = if i == IDLE {
-            ENDS
+            IDLE_LANES
         } else {
             let end = set.rays[i as usize].at(set.t_max[i as usize]);
             let near = |g: &usize| (end - ends[*g]).abs().max_element() <= tolerance[*g];
@@ -397,7 +405,7 @@ fn trace_stream(tracer: &Tracer, set: &RaySet, blocks: &[[u32; 8]], answers: &mu
                     found += 1;
                     found - 1
                 }
-                None => ENDS,
+                None => OTHER,
             }
         };
         group[place] = g as u8;
@@ -405,15 +413,12 @@ fn trace_stream(tracer: &Tracer, set: &RaySet, blocks: &[[u32; 8]], answers: &mu
     }
     if found <= 1 {
         // One end point at most: the blocks are grouped already.
-        for (answer, block) in answers.iter_mut().zip(blocks) {
-            *answer = trace_packet(tracer, set, block);
-        }
-        return;
+        return packets(blocks, answers);
     }
-    // The stream's rays by group (idle lanes last), and where each answer goes; each
-    // group's first place, then its next free one.
-    let mut next = [0u16; ENDS + 1];
-    for g in 1..=ENDS {
+    // The stream's rays in group order, and the place of each; each group's first
+    // place in that order, then its next free one.
+    let mut next = [0u16; ENDS + 2];
+    for g in 1..next.len() {
         next[g] = next[g - 1] + count[g - 1];
     }
     let mut rays = [IDLE; 8 * CHUNK];
@@ -423,15 +428,17 @@ fn trace_stream(tracer: &Tracer, set: &RaySet, blocks: &[[u32; 8]], answers: &mu
         (rays[*slot as usize], to[*slot as usize]) = (i, place as u16);
         *slot += 1;
     }
+    // Packets of the rays that are not idle; the last one's missing lanes are idle.
+    let traced = places.len() - count[IDLE_LANES] as usize;
     let answers = answers.as_flattened_mut();
-    for (rays, to) in rays[..places.len()].chunks_exact(8).zip(to.chunks_exact(8)) {
-        if rays[0] == IDLE {
-            // Idle lanes come last: the rest are idle too.
-            break;
-        }
-        let answer = trace_packet(tracer, set, rays.try_into().expect("eight lanes"));
-        for (&place, a) in to.iter().zip(answer) {
-            answers[place as usize] = a;
+    for start in (0..traced).step_by(8) {
+        let lanes = start..start + 8;
+        let block = rays[lanes.clone()].try_into().expect("eight lanes");
+        let answer = trace_packet(tracer, set, block);
+        for ((&i, &place), a) in rays[lanes.clone()].iter().zip(&to[lanes]).zip(answer) {
+            if i != IDLE {
+                answers[place as usize] = a;
+            }
         }
     }
 }
