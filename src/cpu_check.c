@@ -31,8 +31,9 @@ struct feature {
 
 void p3trace_check_cpu(void) {
     __builtin_cpu_init();
-    /* The extensions of x86-64-v2, v3 and v4 that a build may use, under Rust's names;
-     * GCC's own names are in the calls. */
+    /* The extensions of x86-64-v2, v3 and v4 that a build may use, under Rust's names and
+     * in the order of machine.rs's list (a test there compares the two); GCC's own names
+     * are in the calls. */
     const struct feature features[] = {
         {"sse3", __builtin_cpu_supports("sse3")},
         {"ssse3", __builtin_cpu_supports("ssse3")},

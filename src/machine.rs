@@ -108,4 +108,18 @@ mod tests {
         }
         assert!(cpu_features().contains(&"sse3") || features().is_empty());
     }
+
+    /// The C check (`cpu_check.c`, which must stay C) keeps its own table of the same
+    /// features under the same names: a feature added to one list only fails here.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn the_c_check_knows_the_features_this_list_knows() {
+        let in_c: Vec<&str> = include_str!("cpu_check.c")
+            .lines()
+            .filter_map(|line| line.trim().strip_prefix("{\""))
+            .filter_map(|entry| entry.split('"').next())
+            .collect();
+        let in_rust: Vec<&str> = features().iter().map(|&(name, _, _)| name).collect();
+        assert_eq!(in_c, in_rust);
+    }
 }
