@@ -165,6 +165,8 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
             .map_err(|e| Failure::Run(format!("cannot read '{}': {e}", args.scene.display())))?;
         (scene, farm::scene_hash(&bytes))
     };
+    // Spheres tested as the profile says, here rather than on a copy in the renderer.
+    scene.geometry.spheres.roots = profile.sphere_roots();
     if let Some(aperture) = args.aperture {
         scene.camera.aperture = aperture;
     }

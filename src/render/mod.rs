@@ -19,7 +19,6 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::accel::{Accel, AccelKind, AccelOptions, Tracer};
-use crate::intersect::SphereRoots;
 use crate::limits::{check_image_size, MAX_SPP_SIDE};
 use crate::ray::Ray;
 use crate::scene::Scene;
@@ -206,15 +205,16 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         shutter: options.shutter,
         ..options.accel
     };
-    // The course profile tests spheres as the course's renderer did, on a copy of the
-    // geometry that says so.
-    let course_geometry;
-    let geometry = match options.shade.profile.sphere_roots() {
-        SphereRoots::Precise => &scene.geometry,
-        roots => {
-            course_geometry = scene.geometry.with_sphere_roots(roots);
-            &course_geometry
-        }
+    // Spheres are tested as the profile says (the course's renderer solved the textbook
+    // quadratic): on a copy of the geometry that says so where the scene's does not. The
+    // binary sets the scene's as it reads it, so that no render copies a large scene.
+    let copy;
+    let roots = options.shade.profile.sphere_roots();
+    let geometry = if scene.geometry.spheres.roots == roots {
+        &scene.geometry
+    } else {
+        copy = scene.geometry.with_sphere_roots(roots);
+        &copy
     };
     let (accel, build_time) = Accel::build(geometry, &accel_options);
     let (accel_name, accel_stats) = (accel.name(), accel.stats());
