@@ -607,57 +607,59 @@ mod tests {
             text += &format!("l {} {} 6\n", 6.0 * a.cos(), 6.0 * a.sin());
         }
         text += "s 0 0 0 1\ns 1.5 0.5 1.5 0.5\ns -1.2 -0.8 1.2 0.4\ns 0.3 -1.6 0.8 0.3\n";
-        let scene = parse_text(&text).unwrap();
+        with_sets(&text, |tracer, sets, pool| {
+            let answers = |set: &RaySet, path| {
+                let mut answers = vec![[f32::NAN; 8]; set.blocks.len()];
+                trace_pass(tracer, set, path, pool, &mut answers);
+                in_ray_order(set, &answers)
+            };
+            for set in sets {
+                let single = answers(set, Path::Single);
+                assert!(
+                    single.iter().all(|t| !t.is_nan()),
+                    "{}: every ray answered",
+                    set.name
+                );
+                for path in [Path::Packet, Path::Stream] {
+                    assert!(answers(set, path) == single, "{} {path:?}", set.name);
+                }
+            }
+            let shadow = answers(&sets[1], Path::Single);
+            let blocked = shadow.iter().filter(|&&t| t == 0.0).count();
+            assert!(
+                blocked > 1000 && blocked < shadow.len() / 2,
+                "some shadow rays blocked, most not: {blocked} of {}",
+                shadow.len()
+            );
+        });
+    }
+
+    /// The protocol's sets of the scene `text` under brute force, and two threads.
+    fn with_sets(text: &str, check: impl FnOnce(&Tracer, &[RaySet; 3], &rayon::ThreadPool)) {
+        let scene = parse_text(text).unwrap();
         let tracer = Tracer::new(&scene.geometry, Accel::None);
         let sets = ray_sets(&scene, &tracer);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(2)
             .build()
             .unwrap();
-        let answers = |set: &RaySet, path| {
-            let mut answers = vec![[f32::NAN; 8]; set.blocks.len()];
-            trace_pass(&tracer, set, path, &pool, &mut answers);
-            in_ray_order(set, &answers)
-        };
-        for set in &sets {
-            let single = answers(set, Path::Single);
-            assert!(
-                single.iter().all(|t| !t.is_nan()),
-                "{}: every ray answered",
-                set.name
-            );
-            for path in [Path::Packet, Path::Stream] {
-                assert!(answers(set, path) == single, "{} {path:?}", set.name);
-            }
-        }
-        let shadow = answers(&sets[1], Path::Single);
-        let blocked = shadow.iter().filter(|&&t| t == 0.0).count();
-        assert!(
-            blocked > 1000 && blocked < shadow.len() / 2,
-            "some shadow rays blocked, most not: {blocked} of {}",
-            shadow.len()
-        );
+        check(&tracer, &sets, &pool);
     }
 
     #[test]
     fn checksums_count_hits_and_sum_t() {
         assert_eq!(checksum(&[-1.0, 2.5, 0.0, 1.5]), (3, 4.0));
-        let scene = parse_text(SCENE).unwrap();
-        let tracer = Tracer::new(&scene.geometry, Accel::None);
-        let sets = ray_sets(&scene, &tracer);
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
-        let primary = trace_set(&tracer, &sets[0], Path::Single, &pool, 2).unwrap();
-        assert_eq!(primary.hits as usize, sets[2].rays.len());
-        let packets = trace_set(&tracer, &sets[0], Path::Packet, &pool, 1).unwrap();
-        assert_eq!((packets.hits, packets.tsum), (primary.hits, primary.tsum));
-        let shadow = trace_set(&tracer, &sets[1], Path::Packet, &pool, 1).unwrap();
-        assert_eq!(
-            shadow.hits, 0,
-            "nothing stands between the sphere and its light"
-        );
-        assert_eq!(shadow.tsum, 0.0);
+        with_sets(SCENE, |tracer, sets, pool| {
+            let primary = trace_set(tracer, &sets[0], Path::Single, pool, 2).unwrap();
+            assert_eq!(primary.hits as usize, sets[2].rays.len());
+            let packets = trace_set(tracer, &sets[0], Path::Packet, pool, 1).unwrap();
+            assert_eq!((packets.hits, packets.tsum), (primary.hits, primary.tsum));
+            let shadow = trace_set(tracer, &sets[1], Path::Packet, pool, 1).unwrap();
+            assert_eq!(
+                shadow.hits, 0,
+                "nothing stands between the sphere and its light"
+            );
+            assert_eq!(shadow.tsum, 0.0);
+        });
     }
 }
