@@ -422,34 +422,20 @@ fn trace_tile(
                         .step_by(PACKET_WIDTH as usize)
                         .map(move |bx| (bx, by))
                 });
-            // The primary samples in the packets' order: with fewer samples a pixel than
-            // a packet has lanes, a block's pixels sample by sample; with more, pixel by
-            // pixel, so that a packet's rays leave through one pixel and stay together
-            // down the tree. Each pixel's samples keep their order either way.
+            // The primary samples in the packets' order: a block's pixels one by one, each
+            // with its samples in their order, so that a packet's rays leave through as
+            // few pixels as it can hold.
             let samples = (tile.width * tile.height * grid.cells()) as usize;
             let mut primary = stream::Queue::with_capacity_in(samples, arena);
-            let lanes = PACKET_WIDTH * PACKET_HEIGHT;
-            let mut push = |bx: u32, by: u32, l: u32, p: u32, q: u32| {
-                if let Some((x, y)) = lane_pixel(bx, by, l) {
-                    let (ray, sample) = sample_ray(tile.x + x, tile.y + y, p, q);
-                    primary.push_primary(ray, sample, y * tile.width + x);
-                }
-            };
             for (bx, by) in blocks {
-                if grid.cells() >= lanes {
-                    for l in 0..lanes {
-                        for q in 0..grid.rows {
-                            for p in 0..grid.columns {
-                                push(bx, by, l, p, q);
-                            }
-                        }
-                    }
-                } else {
+                for l in 0..PACKET_WIDTH * PACKET_HEIGHT {
+                    let Some((x, y)) = lane_pixel(bx, by, l) else {
+                        continue;
+                    };
                     for q in 0..grid.rows {
                         for p in 0..grid.columns {
-                            for l in 0..lanes {
-                                push(bx, by, l, p, q);
-                            }
+                            let (ray, sample) = sample_ray(tile.x + x, tile.y + y, p, q);
+                            primary.push_primary(ray, sample, y * tile.width + x);
                         }
                     }
                 }
