@@ -576,3 +576,33 @@ fn crash_81b9_agrees_with_the_standard_profile() {
 fn crash_81b9_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_81B9, Profile::Course);
 }
+
+/// accel_agreement's crash-8fc3db8f9cad (2026-12-01, over 54cdef5): three identical
+/// spheres of radius 6.5 between two planes, lit from 1e9 away and seen from 1e9 away
+/// with depth of field. The standard profile gives one image with every structure, and
+/// brute force gives one in both modes.
+const CRASH_8FC3: Finding = Finding {
+    text: "pl -1000000000 0 0.5 0 -300431360 -0.5 -1000000000 -796635140 -1000000000\n\
+           s 6.5 6.5 6.5 6.5\ns 6.5 6.5 6.5 6.5\ns 6.5 6.5 6.5 6.5\n\
+           l 0 0.5 -0.5 -1000000000 -1000000000 1000000000\n\
+           pl -0.5 6.5 6.5 6.5 6.5 6.5 -1 -1000000000 0\n",
+    from: Vec3::new(0.5, -1e9, -1e9),
+    at: Vec3::new(-1e9, 1e9, 1e9),
+    up: Vec3::new(0.0, 0.0, -0.5),
+    angle: 65.0,
+};
+
+#[test]
+fn crash_8fc3_agrees_with_the_standard_profile() {
+    assert_agrees(&CRASH_8FC3, Profile::Standard);
+}
+
+/// With the course profile the grid and the BVH (in either mode) differ from brute force
+/// on crash-8fc3's scene, as on crash-81b9's; brute force in stream mode gives its scalar
+/// image. The session that found it changed only the order of a stream's primary samples,
+/// which scalar mode does not have.
+#[test]
+#[ignore = "open finding: with the course profile the structures and brute force differ"]
+fn crash_8fc3_agrees_with_the_course_profile() {
+    assert_agrees(&CRASH_8FC3, Profile::Course);
+}
