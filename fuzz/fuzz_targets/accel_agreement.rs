@@ -279,8 +279,11 @@ fuzz_target!(|input: Input| {
     options.shade = options.shade.with_profile(profile);
     options.shade.max_depth = 3;
     if input.jittered {
-        // With samples to spread them over, every distribution effect is on too.
-        options.sampling = Sampling::Jittered(SampleGrid::with_cells(2));
+        // With samples to spread them over, every distribution effect is on too. Two
+        // samples a pixel, or nine (the packet mask's top bit) so that stream packets hold
+        // one pixel's samples.
+        let cells = if input.active >= 0x80 { 9 } else { 2 };
+        options.sampling = Sampling::Jittered(SampleGrid::with_cells(cells));
         options.shade.soft_light_size = Some(0.5);
         options.shade.roughness = 0.3;
         options.shutter = [0.0, 0.5];
