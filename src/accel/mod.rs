@@ -28,6 +28,7 @@ use bvh2::Bvh2;
 pub use bvh2::BvhBuild;
 use bvh8::Bvh8;
 use grid::Grid;
+use hit::for_lanes;
 pub use hit::ClosestHit;
 
 /// The acceleration structure over a scene's bounded primitives: one variant per
@@ -213,7 +214,8 @@ impl<'s> Tracer<'s> {
 
     /// The closest hit of each active lane of `packet` within its interval; `None` for
     /// the other lanes. The same hits as [`Tracer::closest`] gives each ray; the 8-wide
-    /// BVH and the grid trace them as one packet.
+    /// BVH and the grid trace them as one packet, and the planes are tested eight rays at
+    /// a time.
     pub fn closest_packet(&self, packet: &RayPacket) -> [Option<Hit>; 8] {
         let active = packet.active & packet.traceable();
         if active != packet.active {
@@ -233,10 +235,13 @@ impl<'s> Tracer<'s> {
                 })
             }
         }
+        // As `nearer_plane` for each lane: a plane must be closer than the structure's hit.
+        let bounded = closest.map(|c| c.hit);
+        let limits = std::array::from_fn(|k| bounded[k].map_or(t_max[k], |h| h.t));
+        let planes = self.closest_planes(packet, active, limits);
         std::array::from_fn(|k| {
-            let ray = &rays[k];
             (active & (1 << k) != 0)
-                .then(|| self.nearer_plane(ray, ray.dir.recip(), t_min, t_max[k], closest[k].hit))
+                .then(|| planes[k].or(bounded[k]))
                 .flatten()
         })
     }
@@ -247,12 +252,8 @@ impl<'s> Tracer<'s> {
     pub fn occluded_packet(&self, packet: &RayPacket) -> u8 {
         let (rays, t_min, t_max) = (packet.rays, packet.t_min, &packet.t_max);
         let active = packet.active & packet.traceable();
-        let by_plane = lane_mask(|k| {
-            active & (1 << k) != 0
-                && self
-                    .closest_plane(&rays[k], rays[k].dir.recip(), t_min, t_max[k])
-                    .is_some()
-        });
+        let planes = self.closest_planes(packet, active, *t_max);
+        let by_plane = lane_mask(|k| planes[k].is_some());
         let rest = packet.with_active(active & !by_plane);
         let g = self.geometry;
         let blocked = match &self.accel {
@@ -263,6 +264,36 @@ impl<'s> Tracer<'s> {
             }),
         };
         by_plane | blocked
+    }
+
+    /// [`Tracer::closest_plane`] for the lanes `lanes` of `packet`, each within
+    /// `(t_min, t_max[k])`: each plane against the eight rays at once by its packet
+    /// kernel, which answers each lane as the scalar test does (`tests/simd.rs`).
+    fn closest_planes(&self, packet: &RayPacket, lanes: u8, t_max: [f32; 8]) -> [Option<Hit>; 8] {
+        if PrimKind::UNBOUNDED
+            .iter()
+            .all(|&kind| self.geometry.count(kind) == 0)
+        {
+            return [None; 8];
+        }
+        let mut closest = t_max.map(ClosestHit::new);
+        for kind in PrimKind::UNBOUNDED {
+            for prim in self.geometry.ids(kind) {
+                let bounds = closest.each_ref().map(ClosestHit::bound);
+                let hits = self.geometry.intersect_packet(prim, packet, &bounds, lanes);
+                for_lanes(lanes, |k| {
+                    if let Some(h) = hits[k] {
+                        closest[k].offer(Hit {
+                            t: h.t,
+                            prim,
+                            u: h.u,
+                            v: h.v,
+                        });
+                    }
+                });
+            }
+        }
+        closest.map(|c| c.hit)
     }
 
     /// The closest hit among the unbounded primitives (planes), which no structure holds.
