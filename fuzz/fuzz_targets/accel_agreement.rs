@@ -280,8 +280,8 @@ fuzz_target!(|input: Input| {
     options.shade.max_depth = 3;
     if input.jittered {
         // With samples to spread them over, every distribution effect is on too. Two
-        // samples a pixel, or nine (the packet mask's top bit) so that stream packets hold
-        // one pixel's samples.
+        // samples a pixel (a stream packet holds four pixels' samples), or nine (the packet
+        // mask's top bit), so that packets straddle pixels.
         let cells = if input.active >= 0x80 { 9 } else { 2 };
         options.sampling = Sampling::Jittered(SampleGrid::with_cells(cells));
         options.shade.soft_light_size = Some(0.5);
