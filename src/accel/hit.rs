@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use crate::prim::PrimId;
-use crate::ray::{Hit, Ray};
+use crate::ray::{Hit, Ray, RayPacket};
 use crate::scene::Geometry;
 
 /// The closest hit found so far along a ray, with the tie rule of brute force: at equal
@@ -62,6 +62,30 @@ impl ClosestHit {
             });
         }
     }
+}
+
+/// [`ClosestHit::test`] for the lanes `lanes` of `packet`: `prim` against all of them at
+/// once by its packet kernel, each lane within its own bound, and each lane's hit offered
+/// to its closest hit.
+pub fn test_packet(
+    closest: &mut [ClosestHit; 8],
+    geometry: &Geometry,
+    prim: PrimId,
+    packet: &RayPacket,
+    lanes: u8,
+) {
+    let bounds = closest.each_ref().map(ClosestHit::bound);
+    let hits = geometry.intersect_packet(prim, packet, &bounds, lanes);
+    for_lanes(lanes, |k| {
+        if let Some(h) = hits[k] {
+            closest[k].offer(Hit {
+                t: h.t,
+                prim,
+                u: h.u,
+                v: h.v,
+            });
+        }
+    });
 }
 
 /// Calls `f` with the index of each set bit of `mask`, lowest first.

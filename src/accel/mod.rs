@@ -28,7 +28,7 @@ use bvh2::Bvh2;
 pub use bvh2::BvhBuild;
 use bvh8::Bvh8;
 use grid::Grid;
-use hit::for_lanes;
+use hit::test_packet;
 pub use hit::ClosestHit;
 
 /// The acceleration structure over a scene's bounded primitives: one variant per
@@ -279,18 +279,7 @@ impl<'s> Tracer<'s> {
         let mut closest = t_max.map(ClosestHit::new);
         for kind in PrimKind::UNBOUNDED {
             for prim in self.geometry.ids(kind) {
-                let bounds = closest.each_ref().map(ClosestHit::bound);
-                let hits = self.geometry.intersect_packet(prim, packet, &bounds, lanes);
-                for_lanes(lanes, |k| {
-                    if let Some(h) = hits[k] {
-                        closest[k].offer(Hit {
-                            t: h.t,
-                            prim,
-                            u: h.u,
-                            v: h.v,
-                        });
-                    }
-                });
+                test_packet(&mut closest, self.geometry, prim, packet, lanes);
             }
         }
         closest.map(|c| c.hit)
