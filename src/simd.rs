@@ -46,6 +46,12 @@ impl F32x8 {
         self.0.to_array()
     }
 
+    /// Lane `i`, read in place.
+    #[inline]
+    pub fn lane(&self, i: usize) -> f32 {
+        self.0.as_array()[i]
+    }
+
     /// Lane-wise `if self < rhs { self } else { rhs }`: the x86 `minps` rule, and glam's
     /// `Vec3::min`. NaN in either operand, or a tie such as `-0.0` against `0.0`, gives
     /// `rhs`.
@@ -310,14 +316,11 @@ impl Vec3x8 {
         }
     }
 
-    /// Lane `i` as a `Vec3`.
+    /// Lane `i` as a `Vec3`, read in place: a copy of the vectors first costs a store of
+    /// each to the stack (packets read a node's child boxes this way).
     #[inline]
-    pub fn lane(self, i: usize) -> Vec3 {
-        Vec3::new(
-            self.x.to_array()[i],
-            self.y.to_array()[i],
-            self.z.to_array()[i],
-        )
+    pub fn lane(&self, i: usize) -> Vec3 {
+        Vec3::new(self.x.lane(i), self.y.lane(i), self.z.lane(i))
     }
 
     /// `x x' + y y' + z z'`, summed left to right as glam's `Vec3::dot`.
