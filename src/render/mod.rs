@@ -188,18 +188,6 @@ pub struct RenderReport {
 pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, String> {
     options.check_size()?;
     let mut warnings = Vec::new();
-    let skybox = match (&scene.skybox, options.skybox) {
-        (Some(dir), true) => match Skybox::load(dir) {
-            Ok(sky) => Some(sky),
-            Err(e) => {
-                warnings.push(format!(
-                    "skybox not loaded ({e}); the background colour is used instead"
-                ));
-                None
-            }
-        },
-        _ => None,
-    };
     // Moving spheres are bounded over the whole shutter.
     let accel_options = AccelOptions {
         shutter: options.shutter,
@@ -216,7 +204,24 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         copy = scene.geometry.with_sphere_roots(roots);
         &copy
     };
-    let (accel, build_time) = Accel::build(geometry, &accel_options);
+    // The skybox decodes while the structure is built: both use rayon's threads.
+    let (skybox, (accel, build_time)) = rayon::join(
+        || match (&scene.skybox, options.skybox) {
+            (Some(dir), true) => Some(Skybox::load(dir)),
+            _ => None,
+        },
+        || Accel::build(geometry, &accel_options),
+    );
+    let skybox = match skybox {
+        Some(Ok(sky)) => Some(sky),
+        Some(Err(e)) => {
+            warnings.push(format!(
+                "skybox not loaded ({e}); the background colour is used instead"
+            ));
+            None
+        }
+        None => None,
+    };
     let (accel_name, accel_stats) = (accel.name(), accel.stats());
     let tracer = Tracer::new(geometry, accel);
     let jittered = matches!(options.sampling, Sampling::Jittered(_));
