@@ -193,28 +193,43 @@ fn sah_split(items: &mut [Item], bounds: &Aabb) -> Option<usize> {
         let b = ((c - centroids.min[axis]) / extent[axis] * BINS as f32) as usize;
         b.min(BINS - 1)
     };
-    // (cost, axis, last bin on the left)
-    let mut best: Option<(f32, usize, usize)> = None;
-    for axis in 0..3 {
-        if !(extent[axis] > 0.0) {
-            continue;
-        }
-        let mut bins = [(Aabb::EMPTY, 0usize); BINS];
-        for it in items.iter() {
-            let b = &mut bins[bin_of(it.centroid(axis), axis)];
+    // Every axis's bins in one pass over the items: each item's centroid is computed
+    // once, and the axes' bins are filled from it as three passes filled them.
+    let mut bins = [[(Aabb::EMPTY, 0usize); BINS]; 3];
+    for it in items.iter() {
+        let c = it.bounds.centre();
+        for (axis, axis_bins) in bins.iter_mut().enumerate() {
+            let b = &mut axis_bins[bin_of(c[axis], axis)];
             b.0 = b.0.union(it.bounds);
             b.1 += 1;
         }
-        // Areas and counts of everything right of each split, swept from the right.
+    }
+    // (cost, axis, last bin on the left)
+    let mut best: Option<(f32, usize, usize)> = None;
+    for (axis, bins) in bins.iter().enumerate() {
+        if !(extent[axis] > 0.0) {
+            continue;
+        }
+        // Areas and counts of everything right of each split, swept from the right. An
+        // empty bin changes neither (most are empty in the many small nodes).
         let mut right = [(0f32, 0usize); BINS];
         let (mut acc, mut count) = (Aabb::EMPTY, 0);
+        let mut area = acc.area();
         for i in (1..BINS).rev() {
-            acc = acc.union(bins[i].0);
-            count += bins[i].1;
-            right[i] = (acc.area(), count);
+            if bins[i].1 > 0 {
+                acc = acc.union(bins[i].0);
+                count += bins[i].1;
+                area = acc.area();
+            }
+            right[i] = (area, count);
         }
         let (mut acc, mut count) = (Aabb::EMPTY, 0);
         for i in 0..BINS - 1 {
+            // After an empty bin a split costs what the one before it did, and only a
+            // cheaper one replaces the best.
+            if bins[i].1 == 0 {
+                continue;
+            }
             acc = acc.union(bins[i].0);
             count += bins[i].1;
             let (right_area, right_count) = right[i + 1];
