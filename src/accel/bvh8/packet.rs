@@ -6,7 +6,7 @@
 //! average) tests each primitive against all the lanes at once, by the primitives' packet
 //! kernels, rather than each lane against all eight slots of the pack.
 
-use super::node::{leaf_parts, ChildRef, Node8, LEAF, SPHERES, TRIANGLES, WIDTH};
+use super::node::{leaf_parts, ChildRef, Node8, LEAF, SPHERES, TRIANGLES};
 use super::{Bvh8, STACK_SIZE};
 use crate::accel::hit::{for_lanes, ClosestHit};
 use crate::accel::stack::Stack;
@@ -81,25 +81,21 @@ impl Bvh8 {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            // (child, its lanes, the nearest lane's entry), for the children entered.
-            let mut entered = [(0u32, 0u8, 0f32); WIDTH];
-            let mut count = 0;
             let candidates = candidates(node, range.as_ref(), t_min, range_limit);
             let kept = Mask8::from_bitmask(lanes);
+            // (child, its lanes, the nearest lane's entry) for the children entered, sorted
+            // on the stack with the nearest on top to be popped next.
+            let floor = stack.len();
             for_lanes(candidates, |c| {
                 let (min, max) = node.boxes.corners(c);
                 let intervals = box_rays.interval(min, max, lanes_t_min, limit);
                 let hit = intervals.hit & kept;
                 if hit.any() {
                     let nearest = hit.select(intervals.entry, F32x8::splat(f32::INFINITY));
-                    entered[count] = (node.child[c], hit.bitmask(), nearest.min_lane());
-                    count += 1;
+                    let entry = (node.child[c], hit.bitmask(), nearest.min_lane());
+                    stack.push_sorted(floor, entry, |e| e.2);
                 }
             });
-            let entered = &mut entered[..count];
-            // Farthest first on the stack, so the nearest is popped next.
-            entered.sort_unstable_by(|a, b| b.2.total_cmp(&a.2));
-            entered.iter().for_each(|&e| stack.push(e));
         }
     }
 
