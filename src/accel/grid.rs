@@ -12,10 +12,10 @@ use std::cell::RefCell;
 use glam::{IVec3, UVec3, Vec3};
 
 use super::bounds::prim_bounds;
-use super::hit::{for_lanes, ClosestHit};
+use super::hit::{for_lanes, test_packet, ClosestHit};
 use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay};
 use crate::prim::{PrimId, PrimKind};
-use crate::ray::{lane_mask, Hit, Ray, RayPacket};
+use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::scene::Geometry;
 
 /// The report's `m`.
@@ -265,18 +265,8 @@ impl Grid {
                     });
                     return;
                 }
-                // Each lane's bound changes only when it takes a hit.
-                let mut t_max = closest.each_ref().map(|c| c.bound());
                 for &r in self.cell_refs(cell) {
-                    let prim = self.prims[r as usize];
-                    let hits = geometry.intersect_packet(prim, packet, &t_max, lanes);
-                    for (k, hit) in hits.into_iter().enumerate() {
-                        if let Some(h) = hit {
-                            let (t, u, v) = (h.t, h.u, h.v);
-                            closest[k].offer(Hit { t, prim, u, v });
-                            t_max[k] = closest[k].bound();
-                        }
-                    }
+                    test_packet(closest, geometry, self.prims[r as usize], packet, lanes);
                 }
             });
             for (k, walk) in walks.iter_mut().enumerate() {
