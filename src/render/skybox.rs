@@ -33,9 +33,9 @@ pub struct Skybox {
 
 impl Skybox {
     /// Loads `DIR/{right,left,top,bottom,front,back}.jpg` (or `.png`), the faces on
-    /// rayon's threads: the course's six 2048 x 2048 faces take longer to decode than the
-    /// dragon takes to render at one sample a pixel. Of several failures, the first face's
-    /// is reported.
+    /// rayon's threads: the course's six 2048 x 2048 faces take about as long to decode as
+    /// the dragon takes to render at one sample a pixel. Of several failures, the first
+    /// face's is reported.
     pub fn load(dir: &Path) -> Result<Skybox, String> {
         let faces: Vec<Result<FaceImage, String>> = FACE_NAMES
             .par_iter()

@@ -194,7 +194,8 @@ fn sah_split(items: &mut [Item], bounds: &Aabb) -> Option<usize> {
         b.min(BINS - 1)
     };
     // Every axis's bins in one pass over the items: each item's centroid is computed
-    // once, and the axes' bins are filled from it as three passes filled them.
+    // once, and the axes' bins are filled from it as three passes filled them (an axis
+    // without extent fills bins that are never read).
     let mut bins = [[(Aabb::EMPTY, 0usize); BINS]; 3];
     for it in items.iter() {
         let c = it.bounds.centre();
