@@ -215,6 +215,35 @@ fn the_bvh_finds_a_shadow_ray_from_1e9_away() {
     }
 }
 
+/// Open, crash-a68848753ac4 and crash-af490383dea1 (2026-12-01, over d0be412; the same
+/// at e39547c, before that session's changes, checked): a cone whose radii are below
+/// 1e-32 and whose axis keeps within half a unit of x = 0, and a ray straight down from
+/// 1e9 above a point 2.5 units or more off that axis. The cone's test
+/// reports a hit at t = 1e9, where the ray is nowhere near the cone: brute force finds it,
+/// the grid, which trusts the cone's box, does not. The cone test's error from far away
+/// (README, open findings), which keeps cones out of `tests/accel.rs`'s far rays.
+#[test]
+#[ignore = "open finding: a cone's hit from 1e9 away lies far off the cone"]
+fn thin_cone_seen_from_1e9_away_is_missed() {
+    let cases = [
+        (
+            "c 0.000000000000000000000000000000000023886411 0.5 0 0 0 0 -3 \
+             0.0000000000000000000000000000000061622235",
+            Vec3::new(2.5, 1e9, 0.5),
+        ),
+        (
+            "c 0.000000000000000000000000000000000006018714 0.5 3 0 -0.5 0.5 0 0",
+            Vec3::new(7.0, 1e9, -0.5),
+        ),
+    ];
+    for (text, origin) in cases {
+        let scene = parse_text(text).unwrap();
+        let ray = Ray::new(origin, Vec3::NEG_Y);
+        let hit = Tracer::new(&scene.geometry, Accel::None).closest(&ray, 0.0, f32::INFINITY);
+        assert_eq!(hit, None, "{text}");
+    }
+}
+
 /// Open, found by `tests/accel.rs`'s property test on 2026-11-30 (present before that
 /// day's restructuring, which did not change it): a sliver triangle in the plane `y = 0`
 /// whose edges are parallel to within rounding (`|e1 x e2| / (|e1| |e2|)` is about 6e-8,
