@@ -11,7 +11,8 @@ use crate::scene::Geometry;
 /// `t` the smaller [`PrimId`] wins, whatever order the primitives are tested in.
 #[derive(Clone, Copy, Debug)]
 pub struct ClosestHit {
-    pub hit: Option<Hit>,
+    /// Private, so that only `offer` changes it, and `limit` with it.
+    hit: Option<Hit>,
     /// The best hit's `t`, or the ray's end before any hit: kept apart from `hit` so
     /// that a packet reads its lanes' limits without a branch each.
     limit: f32,
@@ -23,6 +24,12 @@ impl ClosestHit {
             hit: None,
             limit: t_max,
         }
+    }
+
+    /// The best hit so far.
+    #[inline]
+    pub fn hit(&self) -> Option<Hit> {
+        self.hit
     }
 
     /// Hits at or beyond this distance cannot win; a hit exactly at it may (a tie).

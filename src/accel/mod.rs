@@ -179,7 +179,7 @@ impl<'s> Tracer<'s> {
             Accel::Bvh2(bvh) => bvh.closest(g, ray, inv_dir, t_min, &mut closest),
             Accel::Bvh8(bvh) => bvh.closest(g, ray, inv_dir, t_min, &mut closest),
         }
-        self.nearer_plane(ray, inv_dir, t_min, t_max, closest.hit)
+        self.nearer_plane(ray, inv_dir, t_min, t_max, closest.hit())
     }
 
     /// The closest hit among the planes and `bounded`, the accelerator's. Planes come
@@ -236,9 +236,8 @@ impl<'s> Tracer<'s> {
             }
         }
         // As `nearer_plane` for each lane: a plane must be closer than the structure's hit.
-        let bounded = closest.map(|c| c.hit);
-        let limits = std::array::from_fn(|k| bounded[k].map_or(t_max[k], |h| h.t));
-        let planes = self.closest_planes(packet, active, limits);
+        let planes = self.closest_planes(packet, active, closest.map(|c| c.limit()));
+        let bounded = closest.map(|c| c.hit());
         std::array::from_fn(|k| {
             (active & (1 << k) != 0)
                 .then(|| planes[k].or(bounded[k]))
@@ -282,7 +281,7 @@ impl<'s> Tracer<'s> {
                 test_packet(&mut closest, self.geometry, prim, packet, lanes);
             }
         }
-        closest.map(|c| c.hit)
+        closest.map(|c| c.hit())
     }
 
     /// The closest hit among the unbounded primitives (planes), which no structure holds.
@@ -293,6 +292,6 @@ impl<'s> Tracer<'s> {
                 closest.test(self.geometry, prim, ray, inv_dir, t_min);
             }
         }
-        closest.hit
+        closest.hit()
     }
 }
