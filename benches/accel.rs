@@ -16,10 +16,10 @@ use p3trace::scene::{parse_file, Scene};
 const STRIDE: usize = 16;
 
 fn scene(name: &str) -> Scene {
-    let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let project = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
     let shared = std::env::var_os("P3TRACE_SHARED")
         .map(PathBuf::from)
-        .unwrap_or_else(|| manifest.join("../shared"));
+        .unwrap_or_else(|| project.join("../shared"));
     let course = shared.join("scenes").join(format!("{name}.p3f"));
     let path = if course.is_file() {
         course
@@ -28,7 +28,7 @@ fn scene(name: &str) -> Scene {
             "{} is absent: using the project's scenes/{name}.p3f",
             course.display()
         );
-        manifest.join("scenes").join(format!("{name}.p3f"))
+        project.join("scenes").join(format!("{name}.p3f"))
     };
     parse_file(&path).expect("the benchmark scene parses")
 }

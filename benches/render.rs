@@ -14,7 +14,7 @@ fn renders(c: &mut Criterion) {
     let mut group = c.benchmark_group("render");
     group.sample_size(10);
     for name in ["balls_low", "balls_medium", "mount_high", "showcase"] {
-        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.p3f"));
+        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../scenes/{name}.p3f"));
         let scene = parse_file(&path).expect("the project's scene parses");
         let mut options = RenderOptions::from_scene(&scene);
         (options.width, options.height) = (128, 128);
@@ -32,7 +32,7 @@ type Effect = fn(&mut Scene, &mut RenderOptions);
 fn effects(c: &mut Criterion) {
     let mut group = c.benchmark_group("effects");
     group.sample_size(10);
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/balls_low.p3f");
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes/balls_low.p3f");
     let scene = parse_file(&path).expect("the project's scene parses");
     let mut base = RenderOptions::from_scene(&scene);
     (base.width, base.height) = (96, 96);

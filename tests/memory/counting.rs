@@ -1,8 +1,5 @@
 //! A global allocator that counts the heap held now and at its peak, and the calls that
-//! asked for memory, for the tests that measure memory (`huge_scene.rs`, `huge_mesh.rs`,
-//! `tile_allocations.rs`). Each of those files holds one test, so that nothing else
-//! allocates meanwhile.
-#![allow(dead_code)] // each test file uses part of it
+//! asked for memory. `main.rs` runs one test at a time, so what it counts is that test's.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};

@@ -2,7 +2,7 @@
 //! their own geometry, the files in `scenes/` against their generators, and every scene
 //! in `scenes/` through the renderer.
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 use std::io::Write;

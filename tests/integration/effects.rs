@@ -1,9 +1,9 @@
 //! The distribution effects of P3F.md section 6, measured on scenes built for the purpose:
 //! what each effect changes, by how much, and what it must leave alone.
 
-mod common;
+use crate::common;
 
-use common::render_scene;
+use crate::common::render_scene;
 use glam::{Vec2, Vec3};
 use p3trace::accel::AccelKind;
 use p3trace::render::film::Film;

@@ -9,13 +9,13 @@
 //! Skips, saying why, when not root or without apt-get (and no Slurm); under CI=true a
 //! root run that cannot bring the cluster up fails instead.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-use common::{project_file, scratch};
+use crate::common::{project_file, scratch};
 
 const TILES: u32 = 8;
 /// Not Slurm's default ports, so that a cluster someone runs by hand is left alone.
@@ -185,7 +185,7 @@ fn part_files(parts: &Path) -> Vec<String> {
 #[test]
 fn a_slurm_job_array_renders_the_one_machine_image_and_resumes_after_cancellation() {
     if let Err(why) = can_run() {
-        eprintln!("skipped: {why}");
+        common::skip(why);
         return;
     }
     let dir = scratch("farm");

@@ -1,7 +1,7 @@
 //! Every acceleration structure against brute force: the same closest hit and the same
 //! occlusion answer on random scenes and rays, and the same images of the course scenes.
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};

@@ -4,12 +4,10 @@
 //! which `.ci/run` installs); without them these tests say that they skip, except under
 //! CI, where a skip would hide a broken setup.
 
-mod common;
-
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use common::{project_file, scratch, stderr};
+use crate::common::{self, project_file, scratch, stderr};
 
 /// Whether `python3 -c CODE` runs.
 fn python_runs(code: &str) -> bool {
@@ -28,7 +26,7 @@ fn have(what: &str, code: &str) -> bool {
     if std::env::var_os("CI").is_some() {
         panic!("{message}; CI must run these tests");
     }
-    eprintln!("skipped: {message}");
+    common::skip(message);
     false
 }
 

@@ -1,23 +1,18 @@
 //! The stream renderer's queues live in each worker's arena: once warm, a tile asks the
 //! global allocator for nothing. Measured by counting the calls of a counting allocator
-//! over two renders that differ only in their number of tiles; this file holds one test
-//! so that nothing else allocates meanwhile.
+//! over two renders that differ only in their number of tiles.
 
-#[path = "common/counting.rs"]
-mod counting;
-
-mod common;
-
+use crate::counting;
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::parse_file;
 
-#[global_allocator]
-static ALLOCATOR: counting::Counting = counting::Counting;
-
-#[test]
-fn a_warm_tile_allocates_nothing() {
+pub fn a_warm_tile_allocates_nothing() {
     // Glass, mirrors and two lights: every depth and kind of queue.
-    let scene = parse_file(&common::project_file("scenes/showcase.p3f")).unwrap();
+    let scene = parse_file(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/showcase.p3f"
+    )))
+    .unwrap();
     let calls = |side: u32| {
         let mut options = RenderOptions::from_scene(&scene);
         (options.width, options.height) = (side, side);

@@ -1,11 +1,11 @@
 //! Whole renders: determinism across threads, pixels against the formulas of P3F.md, and
 //! fidelity against the course's reference images.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 
-use common::render_scene;
+use crate::common::render_scene;
 use glam::Vec3;
 use p3trace::accel::{AccelKind, BvhWidth};
 use p3trace::compare;

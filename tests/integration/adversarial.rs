@@ -2,13 +2,13 @@
 //! exit 2 and `file:line:col` before anything is rendered; odd but valid scenes render
 //! what they should; a failed or interrupted write never leaves an image behind.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use common::{p3trace, scratch, stderr, stdout};
+use crate::common::{p3trace, scratch, stderr, stdout};
 use p3trace::render::film::to_byte;
 
 /// A camera on line 1, looking down -Z at the origin from 5 units away.

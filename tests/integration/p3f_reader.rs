@@ -1,6 +1,6 @@
 //! The P3F reader: every directive, the lexical rules, and errors with file:line:col.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::time::Instant;

@@ -2,11 +2,11 @@
 //! the cost of its own, and `merge` assembles EXR parts into the one-machine image byte
 //! for byte (PNG and EXR alike), or refuses with exit 2 and says why.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 
-use common::{p3trace, project_file, scratch, stderr, stdout};
+use crate::common::{p3trace, project_file, scratch, stderr, stdout};
 use p3trace::accel::AccelKind;
 use p3trace::farm::read_part;
 use p3trace::render::film::{Film, Placement};

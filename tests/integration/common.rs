@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
@@ -9,8 +10,18 @@ use p3trace::render::film::Film;
 use p3trace::render::{render, RenderOptions};
 use p3trace::scene::Scene;
 
+/// Says that the running test skips (all of it, or the part that needs what is missing)
+/// and why, as `skipped: TEST: WHY`. Written to the process's stderr itself, not through
+/// `eprintln!`, which the test harness captures and shows only for failing tests: so a
+/// skip shows in `cargo test`'s output beside the tests' `ok`.
+pub fn skip(why: impl std::fmt::Display) {
+    let thread = std::thread::current();
+    let test = thread.name().unwrap_or("a test");
+    let _ = writeln!(std::io::stderr().lock(), "skipped: {test}: {why}");
+}
+
 /// The course material beside the project (`../shared`), or `P3TRACE_SHARED` when set.
-/// Tests that need it print why they skip when it is absent.
+/// When it is absent, says that the test skips ([`skip`]) and returns `None`.
 pub fn shared() -> Option<PathBuf> {
     let dir = std::env::var_os("P3TRACE_SHARED")
         .map(PathBuf::from)
@@ -18,10 +29,10 @@ pub fn shared() -> Option<PathBuf> {
     if dir.join("scenes").is_dir() {
         Some(dir)
     } else {
-        eprintln!(
-            "skipped: the course material is not at {} (set P3TRACE_SHARED)",
+        skip(format_args!(
+            "the course material is not at {} (set P3TRACE_SHARED)",
             dir.display()
-        );
+        ));
         None
     }
 }
