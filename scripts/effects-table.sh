@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The render-time table of BENCHMARKS.md: the course scenes at 16 samples per pixel, at
-# their own resolution with the SAH BVH (the files say accel 0), with each distribution
-# effect on in turn, on 1 and 2 threads.
+# The distribution effects' render times (BENCHMARKS.md sums them up): the course scenes at
+# 16 samples per pixel, at their own resolution with the SAH BVH (the files say accel 0),
+# with each distribution effect on in turn, on 1 and 2 threads.
 # Usage: scripts/effects-table.sh [SHARED_DIR]   (default ../shared)
 set -euo pipefail
 cd "$(dirname "$0")/.."
