@@ -1,6 +1,6 @@
 //! The one list of primitive kinds, and the ids that name a primitive.
 //!
-//! [`prim_kinds!`] is the list. It hands each kind's entry to a macro that generates
+//! `prim_kinds!` is the list. It hands each kind's entry to a macro that generates
 //! what the kinds need: [`PrimKind`] and its names here, and in
 //! [`crate::scene::geometry`] the [`Geometry`](crate::scene::Geometry) struct with one
 //! field per kind and the dispatch of counts, materials, bounds, intersection (one ray

@@ -5,7 +5,7 @@
 //! beside whatever the accelerator returns.
 //!
 //! All structures return exactly the hit of brute force: the smallest `t`, and at equal
-//! `t` the smallest [`PrimId`] ([`ClosestHit`] keeps that rule), so the images of every
+//! `t` the smallest [`PrimId`](crate::prim::PrimId) ([`ClosestHit`] keeps that rule), so the images of every
 //! structure are the same byte for byte.
 
 pub mod bounds;

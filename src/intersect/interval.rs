@@ -3,7 +3,7 @@
 //! `Bounds3::IntersectP` with its `1 + 2 gamma(3)`). The BVH nodes (both widths, one ray
 //! or a packet) and the grid's bounds all take it from here.
 //!
-//! It is not the Box primitive's test ([`super::aabb`]), and the two must differ. A
+//! It is not the Box primitive's test ([`aabb`](fn@super::aabb)), and the two must differ. A
 //! primitive test answers where the ray meets the surface: exact, and a ray passing
 //! beside the box misses. A node test answers whether a box may hold anything the ray
 //! meets: it must never say no when the objects' own tests, with their own rounding, would

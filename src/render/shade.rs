@@ -361,8 +361,9 @@ impl<'a> Shader<'a> {
     }
 
     /// Blinn-Phong over the lights that face the surface (normal `nf` facing the ray) and
-    /// are not shadowed, with each light's shadow ray from `shadow_of` as in
-    /// [`Shader::shade`].
+    /// are not shadowed: `shadow_of` gives each light's shadow ray ([`Shader::shadow_ray`])
+    /// and whether it is blocked, traced on the spot by [`Shader::trace`] or beforehand as
+    /// packets by the stream renderer.
     pub(super) fn local(
         &self,
         ray: &Ray,
