@@ -6,7 +6,7 @@
 //! field per kind and the dispatch of counts, materials, bounds, intersection (one ray
 //! and eight) and normals to the kind's storage, which implements
 //! [`crate::intersect::Shapes`] in the kind's own file of `src/intersect/`. Adding a kind
-//! is its file there and one line here (ARCHITECTURE.md, "Adding a primitive").
+//! is its file there and one line here (ARCHITECTURE.md, "Recipes").
 
 /// Calls `$then!` with every primitive kind in [`PrimId`] order, one entry a line:
 /// the [`PrimKind`] variant, its field of `Geometry`, its storage type (in
