@@ -45,7 +45,7 @@ pub enum Path {
     Single,
     /// A block of eight rays as one packet.
     Packet,
-    /// The blocks that a thread takes at a time ([`CHUNK`] of them) as one stream, whose
+    /// The blocks that a thread takes at a time (`CHUNK` of them) as one stream, whose
     /// occlusion rays are regrouped by their end point before they are traced as packets
     /// of eight (as Embree's stream API sorts an incoherent stream by direction), the
     /// regrouping timed with the tracing.

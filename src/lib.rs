@@ -13,7 +13,7 @@
 //! - [`limits`] holds the sizes accepted from files and the command line.
 //! - [`compare`] measures how two images differ.
 //! - [`farm`] writes, reads and merges the parts of a frame split over many machines.
-//! - [`bench`] runs the trace-throughput protocol of `../shared/bench/PROTOCOL.md`.
+//! - [`mod@bench`] runs the trace-throughput protocol of `../shared/bench/PROTOCOL.md`.
 //! - [`machine`] says what the binary was built for and what the CPU offers.
 
 // Tests like `!(x > 0.0)` are deliberate: they must also reject NaN, which `x <= 0.0` lets

@@ -1,5 +1,8 @@
 //! The machine: what this binary was built for (version, commit, instruction set) and
-//! what the CPU it runs on offers. `main` checks the CPU before anything else.
+//! what the CPU it runs on offers. `main` checks the CPU before anything else, by
+//! `src/cpu_check.c`, which `build.rs` compiles for the plain x86-64 baseline: a check in
+//! Rust, compiled for x86-64-v3, would use the instructions it checks for before it could
+//! say why it stops. `build.rs` also records the commit and the target's CPU and features.
 
 /// The version of Cargo.toml.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -1,12 +1,12 @@
 //! The one list of primitive kinds, and the ids that name a primitive.
 //!
-//! [`prim_kinds!`] is the list. It hands each kind's entry to a macro that generates
+//! `prim_kinds!` is the list. It hands each kind's entry to a macro that generates
 //! what the kinds need: [`PrimKind`] and its names here, and in
 //! [`crate::scene::geometry`] the [`Geometry`](crate::scene::Geometry) struct with one
 //! field per kind and the dispatch of counts, materials, bounds, intersection (one ray
 //! and eight) and normals to the kind's storage, which implements
 //! [`crate::intersect::Shapes`] in the kind's own file of `src/intersect/`. Adding a kind
-//! is its file there and one line here (ARCHITECTURE.md, "Adding a primitive").
+//! is its file there and one line here (ARCHITECTURE.md, "Recipes").
 
 /// Calls `$then!` with every primitive kind in [`PrimId`] order, one entry a line:
 /// the [`PrimKind`] variant, its field of `Geometry`, its storage type (in

@@ -5,7 +5,10 @@
 //! Every operation is IEEE-exact lane by lane (`+ - * /` and `sqrt` are correctly
 //! rounded, as their scalar counterparts are) and nothing here fuses a multiply with an
 //! add: the kernels must equal their scalar twins bit for bit, and `mul_add` rounds once
-//! where the scalar code rounds twice.
+//! where the scalar code rounds twice. Where the scalar code calls glam (`dot`, `cross`,
+//! `min`, `max`, `recip`), the operations here take glam's order, which is why glam's
+//! version is pinned (`=0.34.2`, in `fuzz/` too): a release that reorders one would part
+//! the twins.
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 

@@ -5,7 +5,15 @@
 //! The report accepts a hit only when it lies before the current cell's exit and finds it
 //! again in a later cell otherwise. Here a hit beyond the exit is kept as a candidate and
 //! the walk stops once a cell's exit passes it: the same answer, and it lets mailboxing
-//! (`--mailbox`) test an object that spans several cells only once per ray.
+//! (`--mailbox`, per-thread stamps) test an object that spans several cells only once per
+//! ray.
+//!
+//! The walk (`Dda`) allows for the rounding of its plane crossings and of the cells'
+//! boundaries, so a ray from far away, or one passing within rounding of an edge, visits
+//! every cell it may be in. A packet's lanes walk their own DDAs in lockstep, and the
+//! lanes standing in one cell test its objects together by the packet kernels. Each axis
+//! has at most [`MAX_AXIS_CELLS`] cells: a flat scene's padded box would otherwise ask
+//! for millions.
 
 use std::cell::RefCell;
 

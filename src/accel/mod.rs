@@ -5,8 +5,14 @@
 //! beside whatever the accelerator returns.
 //!
 //! All structures return exactly the hit of brute force: the smallest `t`, and at equal
-//! `t` the smallest [`PrimId`] ([`ClosestHit`] keeps that rule), so the images of every
-//! structure are the same byte for byte.
+//! `t` the smallest [`PrimId`](crate::prim::PrimId) ([`ClosestHit`] keeps that rule), so
+//! the images of every structure are the same byte for byte.
+//!
+//! [`Tracer`] answers a ray whose origin is not finite, or whose direction is zero or not
+//! finite, with a miss before any structure sees it: the structures would disagree on it.
+//! It takes one ray at a time or a [`RayPacket`]: the 8-wide BVH and the grid trace a
+//! packet together, brute force and the binary BVH lane by lane, and every lane's answer
+//! is its single ray's.
 
 pub mod bounds;
 pub mod bvh2;
@@ -267,7 +273,8 @@ impl<'s> Tracer<'s> {
 
     /// [`Tracer::closest_plane`] for the lanes `lanes` of `packet`, each within
     /// `(t_min, t_max[k])`: each plane against the eight rays at once by its packet
-    /// kernel, which answers each lane as the scalar test does (`tests/simd.rs`).
+    /// kernel, which answers each lane as the scalar test does
+    /// (`tests/integration/simd.rs`).
     fn closest_planes(&self, packet: &RayPacket, lanes: u8, t_max: [f32; 8]) -> [Option<Hit>; 8] {
         if PrimKind::UNBOUNDED
             .iter()

@@ -13,7 +13,7 @@ const LENGTH: f64 = 1.77;
 
 /// Where a model is placed: turned a quarter turn about Y so its length (the Stanford
 /// scan's X) runs along Z, the scan's -X (the head) towards +Z and the camera's left as in
-/// the course's image; scaled to [`LENGTH`], centred on the Y axis, standing on the floor.
+/// the course's image; scaled to `LENGTH`, centred on the Y axis, standing on the floor.
 pub fn placement(mesh: &Mesh) -> impl Fn([f32; 3]) -> DVec3 {
     let turn = |[x, y, z]: [f32; 3]| DVec3::new(z as f64, y as f64, -x as f64);
     let (lo, hi) = mesh.vertices.iter().fold(

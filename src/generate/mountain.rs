@@ -7,6 +7,9 @@
 //! spread is a fixed fraction of the edge length (a fractal of dimension 2). The random
 //! number comes from a hash of the seed and the point's position, so every level refines
 //! the one below it: `mount --level 5` has the same outline as `--level 1`, only finer.
+//!
+//! The rock is written as one `mesh` with shared vertices, where the course files have
+//! separate `p 3` triangles; once read they are the same triangles.
 
 use glam::{DVec2, DVec3};
 

@@ -1,5 +1,8 @@
 //! The course's "random scene" (P3F.md section 8): a grid of small diffuse, metal and
 //! glass spheres around three large ones, on a ground sphere.
+//!
+//! It is P3F text like every generator's: `p3trace render random` reads the text that
+//! `gen random` writes, and its `--seed` lays out the scene as well as seeding the samples.
 
 use glam::DVec3;
 

@@ -1,6 +1,9 @@
 //! Eric Haines' SPD sphereflake ("balls"), as in the course's `balls_*` scenes: a sphere
 //! of radius 0.5 at the origin, and around every sphere nine children a third its size,
 //! touching it, three above its equator and six on it, recursively.
+//!
+//! The floor is the SPD's 24 x 24 square (`p 4`), which the course's reference images
+//! show, where the course files say `pl` (the infinite plane).
 
 use glam::{DMat3, DVec3};
 

@@ -3,14 +3,14 @@
 //! `Bounds3::IntersectP` with its `1 + 2 gamma(3)`). The BVH nodes (both widths, one ray
 //! or a packet) and the grid's bounds all take it from here.
 //!
-//! It is not the Box primitive's test ([`super::aabb`]), and the two must differ. A
-//! primitive test answers where the ray meets the surface: exact, and a ray passing
-//! beside the box misses. A node test answers whether a box may hold anything the ray
-//! meets: it must never say no when the objects' own tests, with their own rounding, would
-//! find a hit inside, so it errs towards visiting. A ray from far away (1e9 units, where
-//! floats are 64 apart) shows the difference: the slab distances are off by up to
-//! `GAMMA_3` of themselves, enough to pass beside a box the objects' tests find the ray
-//! in (fuzz finding 3, `tests/fuzz_findings.rs`).
+//! It is not the Box primitive's test ([`aabb`](fn@super::aabb)), and the two must
+//! differ. A primitive test answers where the ray meets the surface: exact, and a ray
+//! passing beside the box misses. A node test answers whether a box may hold anything
+//! the ray meets: it must never say no when the objects' own tests, with their own
+//! rounding, would find a hit inside, so it errs towards visiting. A ray from far away
+//! (1e9 units, where floats are 64 apart) shows the difference: the slab distances are
+//! off by up to `GAMMA_3` of themselves, enough to pass beside a box the objects' tests
+//! find the ray in (`tests/integration/fuzz_findings.rs`).
 //!
 //! **Per-ray setup.** [`BoxRay`] (one ray) and [`BoxRay8`] (a packet) are built once per
 //! ray, as Embree's `TravRay` is: the origin and a safe inverse direction, whose
@@ -29,7 +29,9 @@
 //! `t_max` give NaN. The clipping, `if t > entry { t } else { entry }` and
 //! `if t < exit { t } else { exit }` (`maxps`/`minps`), keeps the clipped end when `t` is
 //! NaN, so padding boxes are entered and their callers leave them out of the lanes they
-//! keep; a NaN `t_min` or `t_max` is a miss.
+//! keep; a NaN `t_min` or `t_max` is a miss. The rule is one instruction per step in the
+//! SIMD twins, where a NaN-dropping min or max takes four, and it gives one answer for
+//! `-0.0` against `0.0`, which a bit-exact twin needs.
 //!
 //! **The allowance.** Each slab distance `(corner - origin) * inv_dir` is off by up to
 //! `GAMMA_3` of itself, the entry one way and the exit the other, so the exit is widened
@@ -41,7 +43,8 @@
 //!
 //! The SIMD twins ([`BoxRay::intervals8`], one ray against eight boxes, and
 //! [`BoxRay8::interval`], eight rays against one box) repeat the scalar arithmetic in the
-//! same order, so each lane equals [`BoxRay::interval`] bit for bit (`tests/simd.rs`).
+//! same order, so each lane equals [`BoxRay::interval`] bit for bit
+//! (`tests/integration/simd.rs`).
 
 use glam::Vec3;
 

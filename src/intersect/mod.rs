@@ -17,8 +17,8 @@
 //! ray against a pack of eight primitives side by side, padded with inert entries). Both
 //! run one lane-wise body that repeats the scalar arithmetic operation for operation, in
 //! the same order and without fused multiply-adds, so every lane equals the scalar answer
-//! bit for bit (`tests/simd.rs`). They return a hit mask and `t` lanes; the `t` of a lane
-//! that misses is unspecified, and lanes outside `active` always miss.
+//! bit for bit (`tests/integration/simd.rs`). They return a hit mask and `t` lanes; the
+//! `t` of a lane that misses is unspecified, and lanes outside `active` always miss.
 
 mod aabb;
 mod bounds;

@@ -1,4 +1,9 @@
-//! The image being rendered and how it is written (P3F.md section 7).
+//! The image being rendered and how it is written (P3F.md section 7): PNG, PPM, Radiance
+//! HDR or OpenEXR by the file's extension, always through
+//! [`crate::output::write_atomically`]. EXR files hold float32 RGB, ZIP-compressed in
+//! increasing scan lines, so equal pixels give equal bytes, with a [`Placement`]: the
+//! display window, the data window's corner and one `p3trace` note attribute (one,
+//! because the `exr` crate writes its attributes in hash-map order).
 
 use std::io::Write;
 use std::path::Path;

@@ -2,6 +2,13 @@
 //! [`Emitter`], a fixed point or a rectangle sampled at one jittered point of the
 //! sample's cell; without antialiasing rectangles become grids of points. The shader
 //! (`shade.rs`) asks only for the point of a light that a sample sees.
+//!
+//! A soft point light's square lies in the plane perpendicular to the camera's up, its
+//! sides along `up x X` (`up x Z` when up is close to X) and the third axis. An `al` light
+//! faces its target, its width horizontal (perpendicular to world Y), or along X when it
+//! faces straight up or down. A jittered point is drawn anew at every hit along a
+//! sample's path, from that ray's own random numbers, in the cell of the sample's grid
+//! that its primary sample took.
 
 use glam::Vec3;
 

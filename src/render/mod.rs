@@ -1,5 +1,14 @@
 //! From a scene to an image: primary rays from the [`camera`], colours from the Whitted
 //! [`shade`]r, pixels gathered into a [`film`] by tiles spread over threads.
+//!
+//! [`render`] builds the structure and loads the skybox side by side, then renders the
+//! tiles of the region on rayon's threads: one ray at a time, or (the default) as a
+//! stream per tile (`stream.rs`). The stream takes a tile's primary samples by blocks of
+//! 4 x 2 pixels, each pixel's samples in order, so a packet's lanes are eight pixels at
+//! 1 spp and one pixel's samples from 8 spp up. Each pixel sums its samples in one order
+//! whatever the mode, and tiles write their own block of one buffer, so the image is the
+//! same for every mode and thread count. A worker's scratch comes from an arena reset per
+//! tile: a warm tile asks the global allocator for nothing.
 
 pub mod camera;
 pub mod film;

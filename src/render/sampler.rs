@@ -1,6 +1,12 @@
 //! Deterministic random numbers: every value is a hash of (pixel, sample, dimension, seed),
 //! so an image does not depend on the number of threads or the order of work. A ray
-//! carries its numbers, and its primary sample's cell, as a [`Sample`].
+//! carries its numbers, and its primary sample's cell, as a [`Sample`]; a reflected or
+//! transmitted ray derives its own from its parent's ([`Sample::spawn`]).
+//!
+//! A pixel's samples lie on a [`SampleGrid`]: one through the centre (`--spp 1`, a file's
+//! `spp 0`), the k x k jittered grid of a file's `spp k` (P3F.md 6.1), or for `--spp N`
+//! the squarest a x b grid of N cells ([`SampleGrid::with_cells`]). Lights with an area
+//! are sampled over the same a x b cells.
 
 use glam::{Vec2, Vec3};
 

@@ -3,6 +3,16 @@
 //! clamp of every returned colour; and fuzzy reflections (P3F.md 6.4). The `course`
 //! [`Profile`] is section 11's model of the course's own renderer instead. Which point of
 //! each light a hit sees is for [`super::light`] to say.
+//!
+//! A hit is shaded in two steps that the scalar recursion ([`Shader::trace`]) and the
+//! stream renderer (`stream.rs`) share, so both compute the same colours:
+//! `local`, Blinn-Phong over the lights given each one's shadow ray and answer, and
+//! `spawn`, which hands on the reflected ray and then the transmitted one with their
+//! weights. Spawned rays start from the hit recomputed on the surface, offset by its
+//! error bound ([`crate::intersect::SurfacePoint`]); the `course` profile offsets by
+//! [`EPS`] instead. Fuzzy reflection tilts every mirror direction, glass's Fresnel
+//! reflection and total internal reflection included; a roughness of 0 draws no random
+//! number, so its image is the mirror one byte for byte.
 
 use glam::Vec3;
 
@@ -361,8 +371,9 @@ impl<'a> Shader<'a> {
     }
 
     /// Blinn-Phong over the lights that face the surface (normal `nf` facing the ray) and
-    /// are not shadowed, with each light's shadow ray from `shadow_of` as in
-    /// [`Shader::shade`].
+    /// are not shadowed: `shadow_of` gives each light's shadow ray ([`Shader::shadow_ray`])
+    /// and whether it is blocked, traced on the spot by [`Shader::trace`] or beforehand as
+    /// packets by the stream renderer.
     pub(super) fn local(
         &self,
         ray: &Ray,

@@ -126,7 +126,7 @@ impl Face {
     }
 
     /// The direction (largest component of magnitude 1) whose face coordinates are
-    /// `(sc, tc)` in [-1, 1]: the inverse of [`face_coordinates`].
+    /// `(sc, tc)` in [-1, 1]: the inverse of the lookup's `face_coordinates`.
     pub fn direction(self, sc: f32, tc: f32) -> Vec3 {
         match self {
             Face::Left => Vec3::new(1.0, tc, sc),

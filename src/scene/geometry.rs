@@ -5,10 +5,7 @@
 
 use glam::Vec3;
 
-use crate::intersect::{
-    Aabb, Boxes, Cones, MovingSpheres, Planes, Shapes, SphereRoots, Spheres, SurfacePoint,
-    TriangleHit, Triangles,
-};
+use crate::intersect::{Aabb, Shapes, SphereRoots, SurfacePoint, TriangleHit};
 use crate::prim::{prim_kinds, PrimId, PrimKind};
 use crate::ray::{Ray, RayPacket};
 
@@ -17,7 +14,8 @@ macro_rules! define_geometry {
         /// All primitives of a scene, by kind.
         #[derive(Clone, Debug, Default)]
         pub struct Geometry {
-            $(pub $field: $storage,)*
+            // The storage named by its path, so that a new kind needs no import here.
+            $(pub $field: crate::intersect::$storage,)*
         }
 
         impl Geometry {

@@ -2,6 +2,17 @@
 //! parser that fills a [`Scene`]. Every error names `file:line:col` and the directive.
 //! Counts are checked against the bytes left in the file before anything is reserved, so
 //! no header can make the reader allocate more than the file could hold.
+//!
+//! What it accepts beyond P3F.md: numbers at most [`MAX_MAGNITUDE`] in magnitude, and a
+//! moving sphere's two times equal or at least [`MIN_TIME_SPAN`] apart, so that the
+//! intersection routines' products, a moving sphere's centre over the shutter and the
+//! structures' boxes stay finite (every structure needs finite boxes to answer as brute
+//! force; `fuzz/`'s first finding was a centre that overflowed during the shutter). A
+//! negative radius is an error, not NFF's "only the inside is visible", which no course
+//! file uses; a radius of 0 is a warning (never hit). A `resolution` larger than
+//! [`crate::limits::MAX_PIXELS`] is an error at that line, even when `--resolution` would
+//! replace it. Positions are read in a [`Frame`]: the file's coordinates, or relative to
+//! the camera in double precision.
 
 use std::fmt;
 use std::path::Path;

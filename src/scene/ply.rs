@@ -3,6 +3,8 @@
 //!
 //! Only the `vertex` element's `x`, `y`, `z` and the `face` element's index list are kept;
 //! other properties and elements are read past. Polygons are split into triangle fans.
+//! A header's counts reserve no more than the bytes left could hold, so no file makes the
+//! reader allocate beyond its size.
 
 use std::io::Read;
 use std::path::Path;

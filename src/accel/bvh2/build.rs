@@ -63,7 +63,7 @@ pub(super) fn build(
     }
     // A tree of n primitives has at most 2n - 1 nodes: the array is allocated once, at
     // that size, and never grows (growing it copied it at twice its size, the peak of
-    // `tests/huge_scene.rs`).
+    // `tests/memory/huge_scene.rs`).
     let mut nodes = vec![UNUSED; (2 * items.len()).saturating_sub(1)];
     if !items.is_empty() {
         let used = grow(&mut nodes, 0, &mut items, 0, 0, build);

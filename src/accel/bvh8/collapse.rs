@@ -47,7 +47,8 @@ impl Bvh8 {
             binary.children(&root)
         };
         // Counted first and allocated at their size: growing them held up to twice that,
-        // and copied them, beside the binary tree at its largest (`tests/huge_mesh.rs`).
+        // and copied them, beside the binary tree at its largest
+        // (`tests/memory/huge_mesh.rs`).
         let mut size = Size::default();
         if !root_kids.is_empty() {
             binary.size(root_kids.clone(), &mut size);
