@@ -1,6 +1,7 @@
 /*
- * embree-memory: Embree's own memory figure for the two scenes of tests/huge_scene.rs and
- * tests/huge_mesh.rs (BENCHMARKS.md, "Memory at the peak of a huge render"). Builds each
+ * embree-memory: Embree's own memory figure for the two scenes of
+ * tests/memory/huge_scene.rs and tests/memory/huge_mesh.rs (BENCHMARKS.md, "Memory at
+ * the peak of a huge render"). Builds each
  * scene with Embree 3 (default device, default build quality) and counts, through the
  * device's memory monitor callback (rtcSetDeviceMemoryMonitorFunction), the bytes Embree
  * holds after its geometry buffers are filled ("stored") and at most while it commits the
@@ -44,7 +45,7 @@ static void error(void *user, enum RTCError code, const char *what) {
   exit(1);
 }
 
-/* The tests' landscape (tests/huge_mesh.rs). */
+/* The tests' landscape (tests/memory/huge_mesh.rs). */
 static float height(unsigned x, unsigned y) {
   float fx = (float)x, fy = (float)y;
   return 2.0f * sinf(fx * 0.013f) * cosf(fy * 0.017f) + 0.5f * sinf(fx * 0.11f + fy * 0.07f);

@@ -56,7 +56,7 @@ pub fn sphere(ray: &Ray, centre: Vec3, radius: f32, t_min: f32, t_max: f32) -> O
 /// difference about r^2, so single precision loses most of it: for the sphereflake's
 /// smallest spheres (r = 0.0062, D about 3) the hit lands about 1e-4 off the surface,
 /// as far as the ray offset, and some hits shadow themselves. The course's reference
-/// images carry exactly that (P3F.md 11; README, "Matching the course's references").
+/// images carry exactly that (P3F.md 11; `docs/course-profile.md`).
 pub fn sphere_textbook(
     ray: &Ray,
     centre: Vec3,

@@ -221,7 +221,7 @@ fn the_bvh_finds_a_shadow_ray_from_1e9_away() {
 /// 1e9 above a point 2.5 units or more off that axis. The cone's test
 /// reports a hit at t = 1e9, where the ray is nowhere near the cone: brute force finds it,
 /// the grid, which trusts the cone's box, does not. The cone test's error from far away
-/// (README, open findings), which keeps cones out of `tests/accel.rs`'s far rays.
+/// (`docs/fuzzing.md`, open findings), which keeps cones out of `tests/accel.rs`'s far rays.
 #[test]
 #[ignore = "open finding: a cone's hit from 1e9 away lies far off the cone"]
 fn thin_cone_seen_from_1e9_away_is_missed() {

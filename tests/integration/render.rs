@@ -254,11 +254,10 @@ fn share_within_two_levels(scene_path: &Path, reference: &Path, profile: Profile
 }
 
 /// The course's reference images against both profiles: the share of pixels within 2
-/// levels, as measured (the README's table), to 0.1 point either way, so that neither
-/// profile drifts; the course profile (P3F.md section 11) also meets the floors.
-/// balls_low's reference was made with the square floor of `refs/scenes`, the others with
-/// the infinite plane of `scenes/`. balls_high's tiniest spheres (radius 0.0062) keep it
-/// near 94.7% (README: "Matching the course's references").
+/// levels, as measured (the table of `docs/course-profile.md`), to 0.1 point either way,
+/// so that neither profile drifts; the course profile (P3F.md section 11) also meets the
+/// issue's floors. balls_low's reference was made with the square floor of `refs/scenes`,
+/// the others with the infinite plane of `scenes/`.
 #[test]
 fn fidelity_against_the_course_references() {
     let Some(shared) = common::shared() else {

@@ -1,5 +1,5 @@
 //! Ten million triangles: a height field stored as the reader stores a mesh, built into
-//! the default BVH and rendered at a small size within the memory the README states. A
+//! the default BVH and rendered at a small size within the memory `docs/limits.md` states. A
 //! counting allocator measures the peak of the heap.
 
 use crate::counting;

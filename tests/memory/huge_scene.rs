@@ -1,5 +1,5 @@
 //! Ten million spheres: stored, built into the default BVH and rendered at a small size
-//! within the memory the README states. A counting allocator measures the peak of the
+//! within the memory `docs/limits.md` states. A counting allocator measures the peak of the
 //! heap.
 
 use crate::counting;
@@ -12,7 +12,7 @@ const SIDES: [u32; 3] = [250, 200, 200];
 const SPHERES: usize = 10_000_000;
 
 /// The most heap a sphere may take at the peak of storing, building the default BVH and
-/// rendering, as the README states it (136 measured, BENCHMARKS.md: 34 for the sphere
+/// rendering, as `docs/limits.md` states it (136 measured, BENCHMARKS.md: 34 for the sphere
 /// arrays as they grow, 64 for the binary nodes (two per sphere, as the SAH splits the
 /// lattice down to one sphere per leaf), 4 for the primitive order and 34 for the 8-wide
 /// tree being converted from them; the build's items, 28 bytes, are freed before that).

@@ -1,5 +1,5 @@
 //! The tests that count the heap: ten million spheres and ten million triangles within
-//! the memory the README states, and a warm tile that asks the allocator for nothing.
+//! the memory `docs/limits.md` states, and a warm tile that asks the allocator for nothing.
 //! They share a counting allocator, so they run one after another in a process of their
 //! own: no libtest harness (`harness = false` in `Cargo.toml`), whose threads would run
 //! them side by side.
