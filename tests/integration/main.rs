@@ -11,6 +11,7 @@ mod cli;
 mod effects;
 mod farm;
 mod fuzz_findings;
+mod gallery;
 mod generate;
 mod merge;
 mod p3f_reader;
