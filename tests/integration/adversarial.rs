@@ -363,6 +363,8 @@ fn a_full_disk_keeps_the_old_image_and_leaves_no_partial_file() {
             &showcase(),
             "--resolution",
             "256x256",
+            "--spp",
+            "1",
             "-o",
             target.to_str().unwrap(),
         ])

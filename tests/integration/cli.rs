@@ -151,11 +151,14 @@ fn info_lists_objects_lights_and_camera() {
     let text = stdout(&out);
     for line in [
         "spheres              2",
-        "planes               1",
+        "triangles            228",
+        "boxes                2",
         "cones and cylinders  2",
-        "boxes                1",
-        "lights: 2 point, 1 area",
+        "planes               1",
+        "(80 triangles have vertex normals)",
+        "lights: 1 point, 1 area",
         "640x480",
+        "spp (file): 3",
     ] {
         assert!(text.contains(line), "missing '{line}' in:\n{text}");
     }
@@ -529,9 +532,20 @@ fn the_closing_line_counts_rays_exactly_and_stats_combine_with_quiet() {
 fn any_sample_count_renders_as_the_squarest_grid() {
     let dir = scratch("cli_any_spp");
     let text = std::fs::read_to_string(showcase()).unwrap();
+    // The showcase with its `spp` line saying `spp k`.
     let file_spp = |k: u32, name: &str| {
         let path = dir.join(name);
-        std::fs::write(&path, text.replace("spp 0", &format!("spp {k}"))).unwrap();
+        let lines: Vec<String> = text
+            .lines()
+            .map(|line| {
+                if line.starts_with("spp ") {
+                    format!("spp {k}")
+                } else {
+                    line.to_string()
+                }
+            })
+            .collect();
+        std::fs::write(&path, lines.join("\n")).unwrap();
         path.display().to_string()
     };
     let (centre, two) = (file_spp(0, "centre.p3f"), file_spp(2, "two.p3f"));
@@ -543,6 +557,9 @@ fn any_sample_count_renders_as_the_squarest_grid() {
         assert!(run.status.success(), "{args:?}: {}", stderr(&run));
         (stdout(&run), std::fs::read(&out).unwrap())
     };
+    // The showcase's own `spp 3` is 3 x 3 samples.
+    let (line, _) = render(&showcase(), &[], "showcase.png");
+    assert!(line.contains(", 9 spp, "), "{line}");
     // The file's `spp 2` is 2 x 2 samples: --spp 4 on the same scene.
     let (line, from_file) = render(&two, &[], "file.png");
     assert!(line.contains(", 4 spp, "), "{line}");
@@ -722,7 +739,16 @@ fn progress_shows_as_lines_where_stderr_is_not_a_terminal() {
     let out = dir.join("s.png").display().to_string();
     let scene = showcase();
     // 320 x 240 is 20 x 15 tiles of 16 pixels.
-    let args = ["render", &scene, "--resolution", "320x240", "-o", &out];
+    let args = [
+        "render",
+        &scene,
+        "--resolution",
+        "320x240",
+        "--spp",
+        "1",
+        "-o",
+        &out,
+    ];
     let run = p3trace(&args);
     assert!(run.status.success(), "{}", stderr(&run));
     let lines: Vec<String> = stderr(&run)

@@ -12,6 +12,7 @@ mod docs;
 mod effects;
 mod farm;
 mod fuzz_findings;
+mod gallery;
 mod generate;
 mod merge;
 mod p3f_reader;

@@ -166,7 +166,11 @@ fn every_effect_merges_into_the_one_machine_image() {
             scene("dof"),
             &["--spp", "4", "--aperture", "3"],
         ),
-        ("soft_shadows_grid", scene("showcase"), &["--soft-shadows"]),
+        (
+            "soft_shadows_grid",
+            scene("showcase"),
+            &["--soft-shadows", "--spp", "1"],
+        ),
         (
             "soft_and_area_lights",
             scene("showcase"),

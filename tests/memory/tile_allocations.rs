@@ -18,6 +18,9 @@ pub fn a_warm_tile_allocates_nothing() {
         (options.width, options.height) = (side, side);
         options.sampling = Sampling::from_samples_per_pixel(4).unwrap();
         options.threads = Some(1);
+        // The sky's six faces decode on rayon's threads beside the build, in a number of
+        // allocations that varies from run to run; misses take the background instead.
+        options.skybox = false;
         assert_eq!(options.mode, RenderMode::Stream, "the default mode");
         let before = counting::calls();
         let report = render(&scene, &options).unwrap();
