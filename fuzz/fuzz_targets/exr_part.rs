@@ -9,7 +9,7 @@
 use libfuzzer_sys::fuzz_target;
 use p3trace::farm::{read_part, Canvas};
 
-/// Tile 1/3 of an 8 x 6 render of scenes/showcase.p3f.
+/// Tile 1/3 of an 8 x 6 render of an earlier version of scenes/showcase.p3f.
 const TILE: &[u8] = include_bytes!("../seeds/exr_part/tile-1-of-3.exr");
 
 fuzz_target!(|bytes: &[u8]| {
