@@ -787,6 +787,22 @@ fn man_page_documents_every_command() {
         page.contains(r"\fB\-\-accel\fR"),
         "no --accel in the man page"
     );
+    // The title is one line: the version's first, not the instruction set below it.
+    let title_and_next: Vec<&str> = page
+        .lines()
+        .skip_while(|line| !line.starts_with(".TH"))
+        .take(2)
+        .collect();
+    let expected = format!(
+        r#".TH p3trace 1  "p3trace {} (commit "#,
+        env!("CARGO_PKG_VERSION")
+    );
+    assert!(
+        title_and_next[0].starts_with(&expected),
+        "{title_and_next:?}"
+    );
+    assert!(title_and_next[0].ends_with(r#")" "#), "{title_and_next:?}");
+    assert_eq!(title_and_next[1], ".SH NAME", "{title_and_next:?}");
 }
 
 #[test]
