@@ -6,6 +6,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
+use crate::plural::noun;
 use crate::render::film::Film;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -30,6 +31,11 @@ pub struct Levels {
     pub width: u32,
     pub height: u32,
     pub rgb: Vec<f32>,
+}
+
+/// A difference in levels, with its noun: `1 level`, `2.5 levels`.
+pub fn levels(n: f32) -> String {
+    format!("{n} {}", noun(n.into(), "level", "levels"))
 }
 
 /// Reads a PNG, PPM, JPEG or HDR image.

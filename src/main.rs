@@ -17,8 +17,10 @@ use cli::{
 };
 use p3trace::accel::{Accel, AccelKind, AccelOptions};
 use p3trace::accel::{BvhBuild, BvhWidth};
+use p3trace::compare::levels;
 use p3trace::farm::{self, Canvas};
 use p3trace::generate::{dragon, mountain, random, skybox, sphereflake};
+use p3trace::plural::{count, noun};
 use p3trace::prim::PrimKind;
 use p3trace::render::film::{OutputFormat, Placement};
 use p3trace::render::progress::Progress;
@@ -263,13 +265,14 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
             String::new()
         };
         say(&format!(
-            "{}: {}x{}{part}, {}, {:.3} s, {} rays, {:.2} Mrays/s -> {}",
+            "{}: {}x{}{part}, {}, {:.3} s, {} {}, {:.2} Mrays/s -> {}",
             scene.name,
             options.width,
             options.height,
             samples_label(options.sampling),
             seconds,
             grouped(rays),
+            noun(rays as f64, "ray", "rays"),
             rays as f64 / 1e6 / seconds.max(1e-9),
             output.display()
         ));
@@ -318,13 +321,17 @@ fn run_info(path: &Path, accel_args: &AccelArgs) -> Result<ExitCode, Failure> {
     }
     if scene.meshes > 0 {
         println!(
-            "  ({} triangles from {} meshes)",
-            scene.mesh_triangles, scene.meshes
+            "  ({} from {})",
+            count(scene.mesh_triangles as u64, "triangle", "triangles"),
+            count(scene.meshes as u64, "mesh", "meshes")
         );
     }
-    let smooth = g.triangles.vertex_normals.len();
+    let smooth = g.triangles.vertex_normals.len() as u64;
     if smooth > 0 {
-        println!("  ({smooth} triangles have vertex normals)");
+        println!(
+            "  ({} vertex normals)",
+            count(smooth, "triangle has", "triangles have")
+        );
     }
     println!("materials: {}", scene.materials.len());
     let area = scene
@@ -377,8 +384,8 @@ fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
     println!("size: {}x{}", c.width, c.height);
     println!("psnr: {:.2} dB", c.psnr);
     println!("ssim: {:.4}", c.ssim);
-    println!("max channel difference: {} levels", c.max_difference);
-    println!("pixels within {} levels: {share:.3}%", args.tolerance);
+    println!("max channel difference: {}", levels(c.max_difference));
+    println!("pixels within {}: {share:.3}%", levels(args.tolerance));
     if let Some(path) = &args.diff {
         c.heat_map().write(path).map_err(Failure::Run)?;
         println!("diff: {} ({})", path.display(), c.heat_map_scale());
@@ -429,9 +436,9 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
             )),
         };
     };
-    let count = args.tiles.or_else(|| canvas.tile_count());
+    let tile_count = args.tiles.or_else(|| canvas.tile_count());
     if args.missing {
-        let n = count.ok_or_else(|| {
+        let n = tile_count.ok_or_else(|| {
             Failure::Usage(
                 "the parts are not all tiles of one count: give --tiles N to name the \
                  missing tiles"
@@ -444,10 +451,14 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
     }
     if let Some((pixels, gap)) = canvas.gaps() {
         let mut message = format!(
-            "the parts leave {pixels} pixels uncovered, within columns {}..{} and rows {}..{}",
-            gap.x0, gap.x1, gap.y0, gap.y1
+            "the parts leave {} uncovered, within columns {}..{} and rows {}..{}",
+            count(pixels, "pixel", "pixels"),
+            gap.x0,
+            gap.x1,
+            gap.y0,
+            gap.y1
         );
-        if let Some(n) = count {
+        if let Some(n) = tile_count {
             let missing = canvas.missing_tiles(n).map_err(Failure::Usage)?;
             let names: Vec<String> = missing.iter().map(|t| t.to_string()).collect();
             message.push_str(&format!(
@@ -483,11 +494,16 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     let say = human_output(args.json.as_deref());
     say("# p3trace bench: trace-throughput protocol (PROTOCOL.md)");
     say(&format!("# scene {}", scene.name));
+    let geometry = &scene.geometry;
     say(&format!(
-        "# geometry {} bounded objects, {} planes, {} lights",
-        scene.geometry.bounded_count(),
-        scene.geometry.count(PrimKind::Plane),
-        scene.lights.len()
+        "# geometry {}, {}, {}",
+        count(
+            geometry.bounded_count() as u64,
+            "bounded object",
+            "bounded objects"
+        ),
+        count(geometry.count(PrimKind::Plane) as u64, "plane", "planes"),
+        count(scene.lights.len() as u64, "light", "lights")
     ));
     say(&format!(
         "# resolution {width}x{height} (scene {}x{})",
@@ -498,9 +514,10 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
         build_time.as_secs_f64()
     ));
     say(&format!(
-        "# cpu {}, {cores} logical CPUs; best of {} passes",
+        "# cpu {}, {}; best of {}",
         p3trace::machine::cpu_model(),
-        args.reps
+        count(cores as u64, "logical CPU", "logical CPUs"),
+        count(args.reps.into(), "pass", "passes")
     ));
     say("# ray-set  api  threads  rays  hits  tsum  mrays_per_s");
     let mut thread_counts = vec![1];

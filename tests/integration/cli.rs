@@ -167,7 +167,7 @@ fn info_lists_objects_lights_and_camera() {
         shared.join("scenes/dragon.p3f").to_str().unwrap(),
     ]));
     assert!(
-        dragon.contains("(100000 triangles from 1 meshes)"),
+        dragon.contains("(100000 triangles from 1 mesh)"),
         "{dragon}"
     );
 }
@@ -302,7 +302,7 @@ fn gen_dragon_reads_the_stanford_model_when_fetched() {
     ]);
     assert!(run.status.success(), "{}", stderr(&run));
     let info = stdout(&p3trace(&["info", scene.to_str().unwrap()]));
-    assert!(info.contains("(11102 triangles from 1 meshes)"), "{info}");
+    assert!(info.contains("(11102 triangles from 1 mesh)"), "{info}");
 }
 
 #[test]
@@ -904,4 +904,108 @@ fn the_course_profile_takes_its_depth_unless_told_otherwise() {
     assert_eq!(shallow, ("\"course\"".to_string(), 3));
     // The showcase's mirror and glass see the sky through rays of depth 3 and more.
     assert_ne!(standard_image, course_image);
+}
+
+/// Every count printed with its noun takes the singular for one: info, the closing line
+/// and progress of a render, the structure's statistics, bench, merge and compare.
+#[test]
+fn counts_of_one_take_the_singular() {
+    let dir = scratch("cli_singular");
+    let scene = dir.join("one.p3f");
+    std::fs::write(
+        &scene,
+        "v from 0 0 5 at 0 0 0 up 0 1 0 angle 45 resolution 2 1\nl 0 5 5\n\
+         pl 0 -1 0 1 -1 0 0 -1 1\nmesh 3 1 -1 0 0 1 0 0 0 1 0 1 2 3\n\
+         pp 3 -1 0 1 0 0 1 1 0 1 0 0 1 0 1 1 0 0 1\n",
+    )
+    .unwrap();
+    let scene = scene.to_str().unwrap();
+    let info = stdout(&p3trace(&["info", scene]));
+    for expected in [
+        "(1 triangle from 1 mesh)",
+        "(1 triangle has vertex normals)",
+    ] {
+        assert!(info.contains(expected), "'{expected}' not in {info}");
+    }
+    let bench = p3trace(&["bench", scene, "--reps", "1", "--threads", "1"]);
+    let bench = stdout(&bench);
+    assert!(bench.contains(", 1 plane, 1 light\n"), "{bench}");
+    assert!(bench.contains("; best of 1 pass\n"), "{bench}");
+
+    // One pixel, no object in sight: one ray, one tile, one primitive in one leaf.
+    let empty = dir.join("empty.p3f");
+    std::fs::write(
+        &empty,
+        "v from 0 0 5 at 0 0 0 up 0 1 0 angle 45 resolution 1 1\ns 10 10 -10 1\n",
+    )
+    .unwrap();
+    let image = dir.join("empty.exr");
+    let run = p3trace(&[
+        "render",
+        empty.to_str().unwrap(),
+        "--stats",
+        "--bvh-width",
+        "2",
+        "-o",
+        image.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let printed = stdout(&run);
+    for expected in ["(0 interior, 1 leaf)", "(1 primitive)", ", 1 ray, "] {
+        assert!(printed.contains(expected), "'{expected}' not in {printed}");
+    }
+    assert!(
+        stderr(&run).contains("progress: 100% (1 of 1 tile), "),
+        "{}",
+        stderr(&run)
+    );
+
+    // A part of one pixel of a 2x1 image leaves one pixel uncovered.
+    let part = dir.join("part.exr");
+    let run = p3trace(&[
+        "render",
+        scene,
+        "--pixel-bounds",
+        "0,1,0,1",
+        "-o",
+        part.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let merged = dir.join("merged.png");
+    let run = p3trace(&[
+        "merge",
+        part.to_str().unwrap(),
+        "-o",
+        merged.to_str().unwrap(),
+    ]);
+    assert!(
+        stderr(&run).contains("the parts leave 1 pixel uncovered"),
+        "{}",
+        stderr(&run)
+    );
+
+    // Images one level apart.
+    let (a, b) = (dir.join("a.png"), dir.join("b.png"));
+    image::RgbImage::from_pixel(2, 2, image::Rgb([10, 10, 10]))
+        .save(&a)
+        .unwrap();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([11, 10, 10]))
+        .save(&b)
+        .unwrap();
+    let run = p3trace(&[
+        "compare",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--tolerance",
+        "1",
+    ]);
+    let printed = stdout(&run);
+    assert!(
+        printed.contains("max channel difference: 1 level\n"),
+        "{printed}"
+    );
+    assert!(
+        printed.contains("pixels within 1 level: 100.000%"),
+        "{printed}"
+    );
 }
