@@ -25,13 +25,9 @@ pub enum Command {
     /// Render a P3F scene to an image.
     Render(RenderArgs),
     /// Print what a scene holds (objects by kind, materials, lights, camera) and the
-    /// statistics of its acceleration structure.
-    Info {
-        /// The P3F scene file.
-        scene: PathBuf,
-        #[command(flatten)]
-        accel: AccelArgs,
-    },
+    /// statistics of its acceleration structure, built as `render` builds it (the same
+    /// lines as `render --stats` with the same --profile and structure flags).
+    Info(InfoArgs),
     /// Print how two images differ; exit 1 when too few pixels are within the tolerance.
     Compare(CompareArgs),
     /// Assemble the EXR parts of a frame rendered in regions (render --tile, --crop or
@@ -165,10 +161,30 @@ pub enum UpAxis {
     Z,
 }
 
+/// What the scene argument of `render`, `info` and `bench` may be.
+const SCENE_HELP: &str = "The P3F scene file, or `random` for the course's random scene \
+                          (P3F.md section 8) laid out by --seed (a file named random is \
+                          `./random`)";
+
+#[derive(Args, Debug)]
+pub struct InfoArgs {
+    #[arg(help = SCENE_HELP)]
+    pub scene: PathBuf,
+    /// The layout of the `random` scene.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
+    /// Build the structure as `render --profile PROFILE` does: standard stores positions
+    /// relative to the camera, course in the file's coordinates, and the binned SAH build
+    /// can split the two a little differently.
+    #[arg(long, value_enum, value_name = "PROFILE", default_value_t = ProfileChoice::Standard)]
+    pub profile: ProfileChoice,
+    #[command(flatten)]
+    pub accel: AccelArgs,
+}
+
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// The P3F scene file, or `random` for the course's random scene (P3F.md section 8)
-    /// laid out by --seed (a file named random is `./random`).
+    #[arg(help = SCENE_HELP)]
     pub scene: PathBuf,
     /// Output image; the extension picks the format: .png (8-bit), .ppm (8-bit binary
     /// P6), .hdr (linear floating point) or .exr (OpenEXR, linear 32-bit float, with the
@@ -306,8 +322,11 @@ pub struct MergeArgs {
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// The P3F scene file.
+    #[arg(help = SCENE_HELP)]
     pub scene: PathBuf,
+    /// The layout of the `random` scene.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
     /// Threads of the multi-threaded runs (a 1-thread run always comes first).
     /// Default: one per core.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]

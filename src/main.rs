@@ -12,8 +12,8 @@ use std::process::ExitCode;
 use clap::{CommandFactory, Parser};
 
 use cli::{
-    AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand, MergeArgs,
-    ModeChoice, ProfileChoice, RenderArgs, SceneOutput, UpAxis,
+    AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand, InfoArgs,
+    MergeArgs, ModeChoice, ProfileChoice, RenderArgs, SceneOutput, UpAxis,
 };
 use p3trace::accel::{Accel, AccelKind, AccelOptions};
 use p3trace::accel::{BvhBuild, BvhWidth};
@@ -64,7 +64,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => run_render(&args),
-        Command::Info { scene, accel } => run_info(&scene, &accel),
+        Command::Info(args) => run_info(&args),
         Command::Compare(args) => run_compare(&args),
         Command::Merge(args) => run_merge(&args),
         Command::Gen(command) => run_gen(command),
@@ -122,13 +122,40 @@ fn samples_label(sampling: Sampling) -> String {
     }
 }
 
-/// Reads and parses the scene at `path`: a file that cannot be read is an I/O failure
-/// (exit 1), a bad scene a usage one (exit 2, at its `file:line:col`).
-fn load_scene(path: &Path, frame: Frame) -> Result<Scene, Failure> {
-    let scene = scene::parse_file_in(path, frame).map_err(|e| match e {
+/// The scene argument that names the course's random scene rather than a file.
+const RANDOM_SCENE: &str = "random";
+
+/// Reads the scene `path` names in `frame`: a P3F file, or for `random` the course's
+/// random scene laid out by `seed`. A file that cannot be read is an I/O failure (exit 1),
+/// a bad scene a usage one (exit 2, at its `file:line:col`).
+fn read_scene(path: &Path, seed: u64, frame: Frame) -> Result<Scene, Failure> {
+    if path == Path::new(RANDOM_SCENE) {
+        let text = random::random_scene(seed, None);
+        return scene::parse_str_in(&text, RANDOM_SCENE, Path::new(""), frame)
+            .map_err(|e| Failure::Run(e.to_string()));
+    }
+    scene::parse_file_in(path, frame).map_err(|e| match e {
         scene::FileError::Read(message) => Failure::Run(message),
         scene::FileError::Parse(e) => Failure::Usage(e.to_string()),
-    })?;
+    })
+}
+
+/// The hash of the text of the scene `path` names (as for [`read_scene`]), which goes
+/// into an EXR file's note for `merge` to check.
+fn scene_hash(path: &Path, seed: u64) -> Result<u64, Failure> {
+    if path == Path::new(RANDOM_SCENE) {
+        return Ok(farm::scene_hash(
+            random::random_scene(seed, None).as_bytes(),
+        ));
+    }
+    let bytes = std::fs::read(path)
+        .map_err(|e| Failure::Run(format!("cannot read '{}': {e}", path.display())))?;
+    Ok(farm::scene_hash(&bytes))
+}
+
+/// [`read_scene`], then its warnings on stderr; a scene without a camera is refused.
+fn load_scene(path: &Path, seed: u64, frame: Frame) -> Result<Scene, Failure> {
+    let scene = read_scene(path, seed, frame)?;
     for w in &scene.warnings {
         eprintln!(
             "{}:{}:{}: warning: {}",
@@ -151,22 +178,9 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     });
     // Refuse a bad output name before spending time on the render.
     OutputFormat::from_path(&output).map_err(Failure::Usage)?;
-    let profile = match args.profile {
-        ProfileChoice::Standard => Profile::Standard,
-        ProfileChoice::Course => Profile::Course,
-    };
-    // The hash of the scene's text goes into an EXR file's note, for `merge` to check.
-    let (mut scene, scene_hash) = if args.scene == Path::new("random") {
-        let text = random::random_scene(args.seed, None);
-        let scene = scene::parse_str_in(&text, "random", Path::new(""), profile.frame())
-            .map_err(|e| Failure::Run(e.to_string()))?;
-        (scene, farm::scene_hash(text.as_bytes()))
-    } else {
-        let scene = load_scene(&args.scene, profile.frame())?;
-        let bytes = std::fs::read(&args.scene)
-            .map_err(|e| Failure::Run(format!("cannot read '{}': {e}", args.scene.display())))?;
-        (scene, farm::scene_hash(&bytes))
-    };
+    let profile = profile(args.profile);
+    let mut scene = load_scene(&args.scene, args.seed, profile.frame())?;
+    let scene_hash = scene_hash(&args.scene, args.seed)?;
     // Spheres tested as the profile says, here rather than on a copy in the renderer.
     scene.geometry.spheres.roots = profile.sphere_roots();
     if let Some(aperture) = args.aperture {
@@ -284,6 +298,13 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     Ok(ExitCode::SUCCESS)
 }
 
+fn profile(choice: ProfileChoice) -> Profile {
+    match choice {
+        ProfileChoice::Standard => Profile::Standard,
+        ProfileChoice::Course => Profile::Course,
+    }
+}
+
 /// The structure the command line asks for (by default the fastest, whatever the file
 /// says), with its build settings.
 fn accel_options(scene: &Scene, args: &AccelArgs) -> AccelOptions {
@@ -310,8 +331,9 @@ fn accel_options(scene: &Scene, args: &AccelArgs) -> AccelOptions {
     }
 }
 
-fn run_info(path: &Path, accel_args: &AccelArgs) -> Result<ExitCode, Failure> {
-    let scene = load_scene(path, Frame::File)?;
+fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
+    // Described in the file's coordinates, as written.
+    let scene = load_scene(&args.scene, args.seed, Frame::File)?;
     let g = &scene.geometry;
     println!("scene: {}", scene.name);
     let total: usize = PrimKind::ALL.iter().map(|&k| g.count(k)).sum();
@@ -359,8 +381,18 @@ fn run_info(path: &Path, accel_args: &AccelArgs) -> Result<ExitCode, Failure> {
         .map_or("not set".to_string(), |a| format!("{a:?}").to_lowercase());
     println!("accel (file): {accel}");
     println!("spp (file): {}", scene.spp);
-    let options = accel_options(&scene, accel_args);
-    let (structure, build_time) = Accel::build(&scene.geometry, &options);
+    // The structure as `render` builds it: over positions in the profile's frame, moving
+    // spheres bounded over the scene's default shutter.
+    let frame = profile(args.profile).frame();
+    let rendered = (frame != Frame::File)
+        .then(|| read_scene(&args.scene, args.seed, frame))
+        .transpose()?;
+    let rendered = rendered.as_ref().unwrap_or(&scene);
+    let options = AccelOptions {
+        shutter: RenderOptions::from_scene(rendered).shutter,
+        ..accel_options(rendered, &args.accel)
+    };
+    let (structure, build_time) = Accel::build(&rendered.geometry, &options);
     println!(
         "structure: {}, built in {:.3} s",
         structure.name(),
@@ -482,7 +514,7 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
 fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     use p3trace::bench;
     // The protocol's rays are made in the file's coordinates, as the Embree harness's.
-    let scene = load_scene(&args.scene, Frame::File)?;
+    let scene = load_scene(&args.scene, args.seed, Frame::File)?;
     let options = accel_options(&scene, &args.accel);
     let (accel, build_time) = Accel::build(&scene.geometry, &options);
     let (name, stats) = (accel.name(), accel.stats());

@@ -1009,3 +1009,107 @@ fn counts_of_one_take_the_singular() {
         "{printed}"
     );
 }
+
+/// `random` is a scene wherever a scene is taken, laid out by --seed as `gen random`
+/// lays it out.
+#[test]
+fn random_is_a_scene_wherever_a_scene_is_taken() {
+    let dir = scratch("cli_random_everywhere");
+    let file = dir.join("random3.p3f");
+    let run = p3trace(&["gen", "random", "--seed", "3", "-o", file.to_str().unwrap()]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let file = file.to_str().unwrap();
+    // All but the scene's name and the build time.
+    let described = |args: &[&str]| {
+        let run = p3trace(args);
+        assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+        stdout(&run)
+            .lines()
+            .filter(|l| !l.starts_with("scene: ") && !l.starts_with("structure: "))
+            .map(str::to_string)
+            .collect::<Vec<_>>()
+    };
+    let builtin = described(&["info", "random", "--seed", "3"]);
+    assert_eq!(builtin, described(&["info", file]));
+    assert_ne!(builtin, described(&["info", "random", "--seed", "4"]));
+    let info = stdout(&p3trace(&["info", "random", "--seed", "3"]));
+    assert!(info.starts_with("scene: random\n"), "{info}");
+
+    let bench = |scene: &str| {
+        let args = [
+            "bench",
+            scene,
+            "--seed",
+            "3",
+            "--reps",
+            "1",
+            "--threads",
+            "1",
+        ];
+        let run = p3trace(&args);
+        assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+        let text = stdout(&run);
+        let geometry = text
+            .lines()
+            .find(|l| l.starts_with("# geometry"))
+            .map(str::to_string);
+        (text, geometry.unwrap())
+    };
+    let (text, geometry) = bench("random");
+    assert!(text.contains("# scene random\n"), "{text}");
+    assert_eq!(geometry, bench(file).1);
+}
+
+/// `info` builds the structure as `render` does: the same statistics, line for line, for
+/// the same scene, profile and structure. The standard profile stores positions relative
+/// to the camera, which moves the SAH build's bins (the level-6 mountain), and moving
+/// spheres are bounded over the shutter (scenes/motion.p3f).
+#[test]
+fn info_and_render_stats_describe_the_same_structure() {
+    let dir = scratch("cli_same_structure");
+    let mount = dir.join("mount6.p3f");
+    let run = p3trace(&[
+        "gen",
+        "mount",
+        "--level",
+        "6",
+        "--no-env",
+        "-o",
+        mount.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let motion = common::project_file("scenes/motion.p3f");
+    let image = dir.join("out.png");
+    let statistics = |text: &str| -> Vec<String> {
+        let lines: Vec<String> = text
+            .lines()
+            .filter(|l| l.starts_with("  "))
+            .map(str::to_string)
+            .collect();
+        assert!(lines.len() >= 4, "{text}");
+        lines
+    };
+    for scene in [mount.to_str().unwrap(), motion.to_str().unwrap()] {
+        for flags in [
+            &[][..],
+            &["--profile", "course"],
+            &["--accel", "grid"],
+            &["--bvh", "midpoint"],
+        ] {
+            let mut info = vec!["info", scene];
+            info.extend_from_slice(flags);
+            let info = stdout(&p3trace(&info));
+            let info = info.split_once("\nstructure: ").unwrap().1;
+            let mut render = vec!["render", scene, "--stats", "--quiet", "--resolution", "4x4"];
+            render.extend_from_slice(&["-o", image.to_str().unwrap()]);
+            render.extend_from_slice(flags);
+            let run = p3trace(&render);
+            assert!(run.status.success(), "{}", stderr(&run));
+            assert_eq!(
+                statistics(info),
+                statistics(&stdout(&run)),
+                "{scene} {flags:?}"
+            );
+        }
+    }
+}
