@@ -1113,3 +1113,105 @@ fn info_and_render_stats_describe_the_same_structure() {
         }
     }
 }
+
+/// A negative number for a numeric flag gets a message that says what the flag takes
+/// (exit 2), not clap's tip to write `-- -1`; flags whose values may be negative take them.
+#[test]
+fn negative_numbers_get_a_plain_message() {
+    let dir = scratch("cli_negative");
+    let scene = showcase();
+    let image = dir.join("x.png").display().to_string();
+    let other = common::project_file("docs/gallery/random.png")
+        .display()
+        .to_string();
+    let render = |flag: &'static str, value: &'static str| -> Vec<String> {
+        let mut args = vec!["render", &scene, "-o", &image, flag, value];
+        if flag == "--light-size" {
+            args.push("--soft-shadows");
+        }
+        args.into_iter().map(str::to_string).collect()
+    };
+    let mut cases: Vec<(Vec<String>, &str)> = [
+        ("--spp", "-1"),
+        ("--max-depth", "-1"),
+        ("--threads", "-1"),
+        ("--seed", "-1"),
+        ("--aperture", "-1"),
+        ("--focal", "-1"),
+        ("--light-size", "-1"),
+        ("--light-samples", "-1"),
+        ("--roughness", "-1"),
+        ("--shutter", "-1,-2"),
+        ("--resolution", "-8x8"),
+        ("--crop", "-0.5,1,0,1"),
+        ("--pixel-bounds", "-1,4,0,4"),
+        ("--tile", "-1/4"),
+        ("--bvh-width", "-2"),
+        ("--grid-density", "-1"),
+    ]
+    .into_iter()
+    .map(|(flag, value)| (render(flag, value), flag))
+    .collect();
+    let owned = |args: &[&str]| args.iter().map(|a| a.to_string()).collect::<Vec<_>>();
+    for (args, flag) in [
+        (&["info", &scene, "--seed", "-1"][..], "--seed"),
+        (&["bench", &scene, "--threads", "-1"], "--threads"),
+        (&["bench", &scene, "--reps", "-1"], "--reps"),
+        (&["bench", &scene, "--seed", "-1"], "--seed"),
+        (
+            &["merge", "part.exr", "-o", "m.exr", "--tiles", "-1"],
+            "--tiles",
+        ),
+        (
+            &["compare", &other, &other, "--tolerance", "-1"],
+            "--tolerance",
+        ),
+        (
+            &["compare", &other, &other, "--min-match", "-1"],
+            "--min-match",
+        ),
+        (&["gen", "balls", "--depth", "-1"], "--depth"),
+        (&["gen", "mount", "--level", "-1"], "--level"),
+        (&["gen", "mount", "--seed", "-1"], "--seed"),
+        (&["gen", "random", "--seed", "-1"], "--seed"),
+        (&["gen", "skybox", "--size", "-1", "-o", &image], "--size"),
+    ] {
+        cases.push((owned(args), flag));
+    }
+    for (args, flag) in cases {
+        let run = p3trace(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        let message = stderr(&run);
+        assert_eq!(run.status.code(), Some(2), "{args:?}: {message}");
+        assert!(
+            message.starts_with("error: invalid value '-"),
+            "{args:?}: {message}"
+        );
+        assert!(
+            message.contains(&format!("for '{flag} ")),
+            "{args:?}: {message}"
+        );
+        assert!(!message.contains("tip:"), "{args:?}: {message}");
+    }
+    let message = stderr(&p3trace(
+        &render("--spp", "-1")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    ));
+    assert!(
+        message.contains("'-1' is not a whole number from 1 to "),
+        "{message}"
+    );
+    // Shutter times may be negative.
+    let run = p3trace(&[
+        "render",
+        &scene,
+        "--resolution",
+        "8x6",
+        "--shutter",
+        "-0.5,0",
+        "-o",
+        &image,
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+}
