@@ -435,7 +435,12 @@ fn parse_density(text: &str) -> Result<f32, String> {
 
 #[derive(Args, Debug)]
 pub struct CompareArgs {
+    /// An image: PNG, PPM, JPEG, HDR or OpenEXR. An EXR file's linear floats are compared
+    /// as the bytes a PNG of the same render holds (floor(255.99 x), clamped), so that
+    /// `compare a.exr a.png` of one render finds them equal; an EXR region is its data
+    /// window, as the region's PNG holds it.
     pub first: PathBuf,
+    /// The image to compare it with, of the same size, in any of those formats.
     pub second: PathBuf,
     /// Largest channel difference, in 8-bit levels, for a pixel to count as matching.
     #[arg(long, value_name = "N", default_value_t = 0.0, value_parser = parse_tolerance,
@@ -447,10 +452,16 @@ pub struct CompareArgs {
     pub min_match: f64,
     /// Also write a heat map of where the images differ: each pixel's largest channel
     /// difference, black where equal, then blue, red and yellow up to white at the largest
-    /// difference found (the output line gives it in levels). The extension picks the
-    /// format: .png, .ppm, .hdr or .exr.
+    /// difference found, or at --diff-scale (the output line gives it in levels). The
+    /// extension picks the format: .png, .ppm, .hdr or .exr.
     #[arg(long, value_name = "FILE")]
     pub diff: Option<PathBuf>,
+    /// The difference, in levels, that the heat map of --diff draws white; larger ones
+    /// are white too. A small scale shows differences of a level or two that a large one
+    /// elsewhere in the image would leave black. Default: the largest difference found.
+    #[arg(long, value_name = "N", requires = "diff", value_parser = parse_diff_scale,
+          allow_negative_numbers = true)]
+    pub diff_scale: Option<f32>,
 }
 
 /// A number in `range`; `what` names it in the message.
@@ -487,6 +498,12 @@ fn whole<T: TryFrom<u64>>(
 
 fn parse_tolerance(text: &str) -> Result<f32, String> {
     number_in(text, "a tolerance of 0 levels or more", 0.0..)
+}
+
+fn parse_diff_scale(text: &str) -> Result<f32, String> {
+    use std::ops::Bound;
+    let above_zero = (Bound::Excluded(0.0), Bound::Included(f32::MAX));
+    number_in(text, "a difference of more than 0 levels", above_zero)
 }
 
 fn parse_percentage(text: &str) -> Result<f64, String> {

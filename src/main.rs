@@ -419,8 +419,9 @@ fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
     println!("max channel difference: {}", levels(c.max_difference));
     println!("pixels within {}: {share:.3}%", levels(args.tolerance));
     if let Some(path) = &args.diff {
-        c.heat_map().write(path).map_err(Failure::Run)?;
-        println!("diff: {} ({})", path.display(), c.heat_map_scale());
+        let full = args.diff_scale;
+        c.heat_map(full).write(path).map_err(Failure::Run)?;
+        println!("diff: {} ({})", path.display(), c.heat_map_scale(full));
     }
     if share + 1e-9 < args.min_match {
         println!(

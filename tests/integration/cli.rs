@@ -1170,6 +1170,18 @@ fn negative_numbers_get_a_plain_message() {
             &["compare", &other, &other, "--min-match", "-1"],
             "--min-match",
         ),
+        (
+            &[
+                "compare",
+                &other,
+                &other,
+                "--diff",
+                &image,
+                "--diff-scale",
+                "-1",
+            ],
+            "--diff-scale",
+        ),
         (&["gen", "balls", "--depth", "-1"], "--depth"),
         (&["gen", "mount", "--level", "-1"], "--level"),
         (&["gen", "mount", "--seed", "-1"], "--seed"),
@@ -1214,4 +1226,102 @@ fn negative_numbers_get_a_plain_message() {
         &image,
     ]);
     assert!(run.status.success(), "{}", stderr(&run));
+}
+
+/// `compare` reads OpenEXR files as the bytes a PNG of the same render holds: an EXR and
+/// a PNG of one render are equal, a region's EXR is its data window, and the heat map may
+/// be written as EXR and read back.
+#[test]
+fn compare_reads_exr_as_the_png_of_the_same_render() {
+    let dir = scratch("cli_compare_exr");
+    let render = |name: &str, extra: &[&str]| {
+        let path = dir.join(name).display().to_string();
+        let scene = showcase();
+        let mut args = vec!["render", &scene, "--resolution", "32x24", "-o", &path];
+        args.extend_from_slice(extra);
+        let run = p3trace(&args);
+        assert!(run.status.success(), "{}", stderr(&run));
+        path
+    };
+    let (exr, png) = (render("a.exr", &[]), render("a.png", &[]));
+    let same = p3trace(&["compare", &exr, &png]);
+    assert!(same.status.success(), "{}", stderr(&same));
+    let printed = stdout(&same);
+    assert!(printed.contains("size: 32x24\n"), "{printed}");
+    assert!(printed.contains("psnr: inf dB"), "{printed}");
+    assert!(
+        printed.contains("pixels within 0 levels: 100.000%"),
+        "{printed}"
+    );
+
+    let bounds = ["--pixel-bounds", "8,24,4,16"];
+    let (part_exr, part_png) = (render("p.exr", &bounds), render("p.png", &bounds));
+    let part = p3trace(&["compare", &part_exr, &part_png]);
+    assert!(part.status.success(), "{}", stdout(&part));
+    assert!(stdout(&part).contains("size: 16x12\n"), "{}", stdout(&part));
+
+    let other = render("b.exr", &["--spp", "4"]);
+    let heat = dir.join("d.exr").display().to_string();
+    let differ = p3trace(&["compare", &exr, &other, "--diff", &heat]);
+    assert_eq!(differ.status.code(), Some(1), "{}", stderr(&differ));
+    assert!(!stdout(&differ).contains("max channel difference: 0 levels"));
+    let read_back = p3trace(&["compare", &heat, &heat]);
+    assert!(read_back.status.success(), "{}", stderr(&read_back));
+    assert!(stdout(&read_back).contains("size: 32x24\n"));
+}
+
+/// `--diff-scale N` draws a difference of N levels white, and larger ones white too, so
+/// that differences of a level or two show beside a large one.
+#[test]
+fn diff_scale_shows_small_differences_beside_a_large_one() {
+    let dir = scratch("cli_diff_scale");
+    let (a, b) = (dir.join("a.png"), dir.join("b.png"));
+    image::RgbImage::from_pixel(4, 1, image::Rgb([100, 100, 100]))
+        .save(&a)
+        .unwrap();
+    let mut changed = image::RgbImage::from_pixel(4, 1, image::Rgb([100, 100, 100]));
+    changed.get_pixel_mut(1, 0).0[0] += 1;
+    changed.get_pixel_mut(2, 0).0[1] += 2;
+    changed.get_pixel_mut(3, 0).0[2] += 100;
+    changed.save(&b).unwrap();
+    let map = dir.join("diff.png");
+    let (a, b, map_arg) = (
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        map.to_str().unwrap(),
+    );
+    let heat = |extra: &[&str]| {
+        let mut args = vec!["compare", a, b, "--diff", map_arg];
+        args.extend_from_slice(extra);
+        let run = p3trace(&args);
+        assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+        let pixels: Vec<[u8; 3]> = image::open(&map)
+            .unwrap()
+            .to_rgb8()
+            .pixels()
+            .map(|p| p.0)
+            .collect();
+        (stdout(&run), pixels)
+    };
+    let (printed, pixels) = heat(&["--diff-scale", "2"]);
+    assert!(
+        printed.contains(&format!(
+            "diff: {map_arg} (black 0 levels, then blue, red, yellow, white 2 levels or more)"
+        )),
+        "{printed}"
+    );
+    assert_eq!(pixels[0], [0, 0, 0], "equal");
+    assert_eq!(pixels[1], [255, 0, 0], "1 level of 2: red");
+    assert_eq!(pixels[2], [255, 255, 255], "2 levels: white");
+    assert_eq!(pixels[3], [255, 255, 255], "100 levels: white too");
+    // By default the scale is the largest difference, and 1 level is all but black.
+    let (printed, pixels) = heat(&[]);
+    assert!(printed.contains("white 100 levels)"), "{printed}");
+    assert_eq!(pixels[3], [255, 255, 255]);
+    assert!(pixels[1].iter().all(|&c| c < 16), "{:?}", pixels[1]);
+
+    let without_diff = p3trace(&["compare", a, b, "--diff-scale", "2"]);
+    assert_eq!(without_diff.status.code(), Some(2));
+    let help = stdout(&p3trace(&["compare", "--help"]));
+    assert!(help.contains("--diff-scale"), "{help}");
 }
