@@ -124,11 +124,16 @@ pub enum GenCommand {
 
 #[derive(Args, Debug)]
 pub struct SceneOutput {
-    /// Where to write the scene (default: standard output).
+    /// Where to write the scene (default: standard output). The skybox is named from the
+    /// file's folder, so a scene meant for another folder is best written there with -o
+    /// rather than through a redirection of standard output.
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
-    /// The skybox folder for the scene's `env` line, relative to the scene file.
-    /// Default: the project's sky_zup (Z-up scenes) or sky_yup (Y-up scenes); the random
+    /// The skybox folder for the scene's `env` line, as a path from the current folder
+    /// (an absolute one is written as it is). The scene names it from its own folder with
+    /// -o FILE (relative where the two share more than the root, else absolute), from the
+    /// current folder on standard output. Default: the project's scenes/sky_zup (Z-up
+    /// scenes) or scenes/sky_yup (Y-up scenes), from the project's folder; the random
     /// scene has none.
     #[arg(long, value_name = "DIR", conflicts_with = "no_env")]
     pub env: Option<String>,

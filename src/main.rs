@@ -6,7 +6,7 @@ mod manual;
 mod statistics;
 
 use std::io::{IsTerminal, Write};
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{CommandFactory, Parser};
@@ -598,9 +598,10 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The project's skybox folders, beside the scenes in `scenes/`.
-const SKY_Z_UP: &str = "sky_zup";
-const SKY_Y_UP: &str = "sky_yup";
+/// The project's skybox folders, beside the scenes in `scenes/`, from the project's
+/// folder (as the dragon's models in `data/` are).
+const SKY_Z_UP: &str = "scenes/sky_zup";
+const SKY_Y_UP: &str = "scenes/sky_yup";
 
 fn run_gen(command: GenCommand) -> Result<ExitCode, Failure> {
     let (text, out) = match command {
@@ -668,15 +669,63 @@ fn write_to_stdout(bytes: &[u8], what: &str) -> Result<ExitCode, Failure> {
 impl SceneOutput {
     /// Before the scene is made: refuses an output file that cannot be written, and
     /// returns the folder for the `env` line: the one asked for, none with --no-env, else
-    /// the scene's default.
+    /// the scene's default, named from where the scene is written ([`path_from`]).
     fn prepare(&self, default: Option<&str>) -> Result<Option<String>, Failure> {
         if let Some(file) = &self.output {
             check_output(file)?;
         }
-        if self.no_env {
-            Ok(None)
-        } else {
-            Ok(self.env.clone().or(default.map(str::to_string)))
+        let Some(sky) = self.env.as_deref().or(default).filter(|_| !self.no_env) else {
+            return Ok(None);
+        };
+        let sky = PathBuf::from(sky);
+        if !sky.is_dir() {
+            eprintln!(
+                "p3trace: warning: no skybox folder at {}: the scene will show its \
+                 background colour (--env DIR names the folder, from the current one)",
+                sky.display()
+            );
         }
+        let named = match &self.output {
+            Some(file) => path_from(file, &sky)?,
+            None => sky,
+        };
+        Ok(Some(named.display().to_string()))
     }
+}
+
+/// `target`, a path from the current folder, as a path from the folder of `file`: relative
+/// where the two share more than the root (the project's own files keep their names in
+/// `scenes/`), else absolute; an absolute `target` stays as it is.
+fn path_from(file: &Path, target: &Path) -> Result<PathBuf, Failure> {
+    if target.is_absolute() {
+        return Ok(target.to_path_buf());
+    }
+    let folder = p3trace::output::folder_of(file);
+    let cannot = |path: &Path, e: std::io::Error| {
+        Failure::Run(format!("cannot find {}: {e}", path.display()))
+    };
+    let folder = folder.canonicalize().map_err(|e| cannot(folder, e))?;
+    // A folder that does not exist (yet) is named as it is written.
+    let target = match target.canonicalize() {
+        Ok(target) => target,
+        Err(_) => std::env::current_dir()
+            .map_err(|e| cannot(Path::new("."), e))?
+            .join(target),
+    };
+    let shared = (folder.components().zip(target.components()))
+        .take_while(|(a, b)| a == b)
+        .count();
+    if shared <= 1 {
+        return Ok(target);
+    }
+    let up = folder
+        .components()
+        .skip(shared)
+        .map(|_| Component::ParentDir);
+    let relative: PathBuf = up.chain(target.components().skip(shared)).collect();
+    Ok(if relative.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        relative
+    })
 }

@@ -233,18 +233,30 @@ fn compare_reports_and_exits_by_tolerance() {
 
 #[test]
 fn gen_writes_the_scenes_of_scenes_and_refuses_what_it_cannot_make() {
-    // Standard output and -o give the same text, and it is the file in scenes/.
+    // Standard output and -o give the text of the file in scenes/, but for the skybox's
+    // path: from the current folder (the project's, where the tests run) on standard
+    // output, from the file's folder with -o.
     let out = p3trace(&["gen", "balls", "--depth", "2"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let committed =
         std::fs::read_to_string(common::project_file("scenes/balls_medium.p3f")).unwrap();
-    assert_eq!(stdout(&out), committed);
+    assert_eq!(
+        stdout(&out),
+        committed.replace("\nenv sky_zup\n", "\nenv scenes/sky_zup\n")
+    );
     let dir = scratch("cli_gen");
     let file = dir.join("mount.p3f");
     let run = p3trace(&["gen", "mount", "--level", "1", "-o", file.to_str().unwrap()]);
     assert!(run.status.success(), "{}", stderr(&run));
     let committed = std::fs::read_to_string(common::project_file("scenes/mount_low.p3f")).unwrap();
-    assert_eq!(std::fs::read_to_string(&file).unwrap(), committed);
+    let without_env = |text: &str| -> Vec<String> {
+        let lines = text.lines().filter(|l| !l.starts_with("env "));
+        lines.map(str::to_string).collect()
+    };
+    assert_eq!(
+        without_env(&std::fs::read_to_string(&file).unwrap()),
+        without_env(&committed)
+    );
     let with_env = stdout(&p3trace(&["gen", "random", "--seed", "2", "--env", "sky"]));
     assert!(with_env.contains("\nenv sky\n"), "{with_env}");
     let no_env = stdout(&p3trace(&["gen", "balls", "--depth", "0", "--no-env"]));
@@ -1324,4 +1336,108 @@ fn diff_scale_shows_small_differences_beside_a_large_one() {
     assert_eq!(without_diff.status.code(), Some(2));
     let help = stdout(&p3trace(&["compare", "--help"]));
     assert!(help.contains("--diff-scale"), "{help}");
+}
+
+/// A scene written elsewhere by `gen -o FILE` names the project's skybox by a path that
+/// resolves from FILE's folder; in scenes/ it stays `sky_zup`, as the committed files say;
+/// on standard output it is a path from the current folder.
+#[test]
+fn gen_names_the_skybox_from_where_the_scene_is_written() {
+    let root = common::project_file("");
+    let dir = scratch("cli_gen_paths");
+    let elsewhere = dir.join("elsewhere");
+    std::fs::create_dir(&elsewhere).unwrap();
+    let gen_in = |cwd: &std::path::Path, args: &[&str]| {
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_p3trace"))
+            .args(args)
+            .current_dir(cwd)
+            .output()
+            .unwrap();
+        assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+        run
+    };
+    let env_of = |text: &str| {
+        let line = text.lines().find(|l| l.starts_with("env ")).unwrap();
+        line["env ".len()..].to_string()
+    };
+    let scene = elsewhere.join("balls.p3f");
+    gen_in(
+        &root,
+        &[
+            "gen",
+            "balls",
+            "--depth",
+            "1",
+            "-o",
+            scene.to_str().unwrap(),
+        ],
+    );
+    let env = env_of(&std::fs::read_to_string(&scene).unwrap());
+    assert!(env.starts_with("../"), "relative: {env}");
+    assert_eq!(
+        elsewhere.join(&env).canonicalize().unwrap(),
+        root.join("scenes/sky_zup").canonicalize().unwrap()
+    );
+    // It renders with its sky: unlike the same render without it, and without a warning.
+    let render = |extra: &[&str], name: &str| {
+        let image = dir.join(name).display().to_string();
+        let mut args = vec!["render", scene.to_str().unwrap(), "--resolution", "16x12"];
+        args.extend_from_slice(&["-o", &image]);
+        args.extend_from_slice(extra);
+        let run = p3trace(&args);
+        assert!(run.status.success(), "{}", stderr(&run));
+        assert!(!stderr(&run).contains("warning"), "{}", stderr(&run));
+        std::fs::read(&image).unwrap()
+    };
+    assert_ne!(
+        render(&[], "sky.png"),
+        render(&["--no-skybox"], "plain.png")
+    );
+    // --env names a folder from the current one, like every other path.
+    let random = elsewhere.join("random.p3f");
+    gen_in(
+        &root,
+        &[
+            "gen",
+            "random",
+            "--env",
+            "scenes/sky_yup",
+            "-o",
+            random.to_str().unwrap(),
+        ],
+    );
+    let env = env_of(&std::fs::read_to_string(&random).unwrap());
+    assert_eq!(
+        elsewhere.join(&env).canonicalize().unwrap(),
+        root.join("scenes/sky_yup").canonicalize().unwrap()
+    );
+
+    // In a project's scenes/ folder, the committed file, byte for byte.
+    let project = dir.join("project");
+    std::fs::create_dir_all(project.join("scenes/sky_zup")).unwrap();
+    gen_in(
+        &project,
+        &[
+            "gen",
+            "balls",
+            "--depth",
+            "2",
+            "-o",
+            "scenes/balls_medium.p3f",
+        ],
+    );
+    let committed = std::fs::read(root.join("scenes/balls_medium.p3f")).unwrap();
+    let written = std::fs::read(project.join("scenes/balls_medium.p3f")).unwrap();
+    assert!(written == committed, "scenes/balls_medium.p3f differs");
+    // On standard output, from the current folder.
+    let printed = stdout(&gen_in(&project, &["gen", "balls", "--depth", "2"]));
+    assert_eq!(env_of(&printed), "scenes/sky_zup");
+
+    // Where the skybox is missing, gen says so.
+    let run = gen_in(&elsewhere, &["gen", "balls", "--depth", "0", "-o", "b.p3f"]);
+    assert!(
+        stderr(&run).contains("warning: no skybox folder at scenes/sky_zup"),
+        "{}",
+        stderr(&run)
+    );
 }
