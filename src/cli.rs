@@ -15,8 +15,9 @@ use p3trace::render::region::TileIndex;
     version = p3trace::machine::LONG_VERSION,
     about = "A fast Whitted and distribution ray tracer for P3F scenes (the P3D course format)",
     after_help = "Exit status: 0 success, 1 a render or I/O failure (an output that cannot be \
-                  written is refused before the work), 2 bad usage or a bad scene, 130 \
-                  interrupted (Ctrl-C, SIGTERM or SIGHUP)."
+                  written is refused before the work), 2 bad usage or a bad scene, 128 + N \
+                  after signal N, the partial file removed: 130 Ctrl-C (SIGINT), 143 \
+                  SIGTERM, 129 SIGHUP."
 )]
 pub struct Cli {
     #[command(subcommand)]

@@ -1,5 +1,6 @@
 //! The `p3trace` command: parses the command line, calls the library, and maps failures
-//! to exit codes (1 a render or I/O failure, 2 bad usage or a bad scene, 130 Ctrl-C).
+//! to exit codes (1 a render or I/O failure, 2 bad usage or a bad scene, 128 + N after
+//! signal N: 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP).
 
 mod cli;
 mod manual;
@@ -38,10 +39,6 @@ enum Failure {
     Run(String),
 }
 
-/// The exit status after Ctrl-C: 128 + SIGINT, as a shell reports a process it stopped.
-/// SIGTERM and SIGHUP take the same way out, with the same status.
-const INTERRUPTED: i32 = 130;
-
 fn main() -> ExitCode {
     // First, before any code that may use them: a CPU without the instructions the
     // binary was compiled for would otherwise die of an illegal instruction.
@@ -53,14 +50,8 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    // On Ctrl-C, SIGTERM or SIGHUP, remove the file being written, if any, and leave.
-    // Should the handler fail to install, the signals keep their default action: the
-    // target is still never truncated, but a `.partial` file may stay.
-    let _ = ctrlc::set_handler(|| {
-        let _held_until_exit = p3trace::output::abandon_partial_files();
-        eprintln!("p3trace: interrupted");
-        std::process::exit(INTERRUPTED);
-    });
+    #[cfg(unix)]
+    exit_cleanly_on_signals();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => run_render(&args),
@@ -86,6 +77,55 @@ fn main() -> ExitCode {
         Err(Failure::Run(message)) => {
             eprintln!("p3trace: error: {message}");
             ExitCode::from(1)
+        }
+    }
+}
+
+/// On Ctrl-C (SIGINT), SIGTERM or SIGHUP: removes the file being written, if any, and
+/// exits 128 + the signal's number, the status a shell gives a process the signal ended.
+/// The signals are blocked in every thread (threads inherit the mask: this runs before
+/// any other exists) and taken by one that waits for them, so the cleanup runs as
+/// ordinary code, not in a signal handler. Should that thread fail to start, the signals
+/// keep their default action: the target is still never truncated, but a `.partial` file
+/// may stay.
+#[cfg(unix)]
+fn exit_cleanly_on_signals() {
+    const SIGNALS: [(libc::c_int, &str); 3] = [
+        (libc::SIGINT, "SIGINT"),
+        (libc::SIGTERM, "SIGTERM"),
+        (libc::SIGHUP, "SIGHUP"),
+    ];
+    // SAFETY: `set` is initialised by sigemptyset before use, and the mask changes this
+    // thread's only.
+    let set = unsafe {
+        let mut set: libc::sigset_t = std::mem::zeroed();
+        libc::sigemptyset(&mut set);
+        for (signal, _) in SIGNALS {
+            libc::sigaddset(&mut set, signal);
+        }
+        if libc::pthread_sigmask(libc::SIG_BLOCK, &set, std::ptr::null_mut()) != 0 {
+            return;
+        }
+        set
+    };
+    let waiter = std::thread::Builder::new()
+        .name("signals".into())
+        .spawn(move || loop {
+            let mut signal = 0;
+            // SAFETY: `set` is a valid signal set and `signal` a place for the answer;
+            // sigwait fails only for an invalid set.
+            if unsafe { libc::sigwait(&set, &mut signal) } != 0 {
+                continue;
+            }
+            let _held_until_exit = p3trace::output::abandon_partial_files();
+            let name = SIGNALS.iter().find(|(s, _)| *s == signal).map(|(_, n)| *n);
+            eprintln!("p3trace: interrupted ({})", name.unwrap_or("a signal"));
+            std::process::exit(128 + signal);
+        });
+    if waiter.is_err() {
+        // SAFETY: as above.
+        unsafe {
+            libc::pthread_sigmask(libc::SIG_UNBLOCK, &set, std::ptr::null_mut());
         }
     }
 }

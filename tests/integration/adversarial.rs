@@ -486,16 +486,41 @@ fn a_full_disk_keeps_the_old_image_and_leaves_no_partial_file() {
     assert_eq!(std::fs::read(&target).unwrap(), b"the previous image");
 }
 
+/// The signals that end a run cleanly, as `kill` names them, and the exit status each
+/// gives: 128 + its number, as a shell reports a process the signal ended.
+const SIGNALS: [(&str, i32); 3] = [("INT", 130), ("TERM", 143), ("HUP", 129)];
+
 #[test]
-fn ctrl_c_and_termination_exit_130_and_leave_no_image() {
-    for signal in ["-INT", "-TERM", "-HUP"] {
-        interrupted_render_leaves_no_image(signal);
+fn ctrl_c_and_termination_exit_128_plus_the_signal_and_leave_no_image() {
+    for (signal, status) in SIGNALS {
+        interrupted_render_leaves_no_image(signal, status);
     }
 }
 
-/// Sends `signal` (a `kill` option) to a long render.
-fn interrupted_render_leaves_no_image(signal: &str) {
-    let dir = scratch(&format!("adversarial_signal{signal}"));
+/// Waits for `child` to end after `signal`, and returns what it said.
+fn stopped(mut child: std::process::Child, signal: &str) -> std::process::Output {
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(30) {
+            child.kill().unwrap();
+            panic!("p3trace did not stop within 30 s of SIG{signal}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+fn send(signal: &str, child: &std::process::Child) {
+    let kill = Command::new("kill")
+        .args([format!("-{signal}"), child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+}
+
+/// Sends `signal` (as `kill` names it) to a long render, which must exit with `status`.
+fn interrupted_render_leaves_no_image(signal: &str, status: i32) {
+    let dir = scratch(&format!("adversarial_signal_{signal}"));
     let target = dir.join("out.png");
     // Minutes of work on one thread: still rendering when the interrupt comes.
     let mut child = Command::new(env!("CARGO_BIN_EXE_p3trace"))
@@ -520,22 +545,58 @@ fn interrupted_render_leaves_no_image(signal: &str) {
         child.try_wait().unwrap().is_none(),
         "the render ended before the interrupt"
     );
-    let kill = Command::new("kill")
-        .args([signal, &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(30) {
-            child.kill().unwrap();
-            panic!("p3trace did not stop within 30 s of {signal}");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let out = child.wait_with_output().unwrap();
+    send(signal, &child);
+    let out = stopped(child, signal);
     let message = stderr(&out);
-    assert_eq!(out.status.code(), Some(130), "{signal}: {message}");
-    assert!(message.contains("p3trace: interrupted"), "{message}");
+    assert_eq!(out.status.code(), Some(status), "SIG{signal}: {message}");
+    assert!(
+        message.contains(&format!("p3trace: interrupted (SIG{signal})")),
+        "{message}"
+    );
     assert!(files_in(&dir).is_empty(), "{:?}", files_in(&dir));
+}
+
+/// A signal that comes while the output is being written removes the partial file. The
+/// partial file is made a FIFO that nobody reads, so that the writer blocks in the
+/// middle of the scene (far longer than a pipe's buffer) until the signal comes.
+#[test]
+fn a_signal_during_the_write_removes_the_partial_file() {
+    use std::os::unix::fs::OpenOptionsExt;
+    for (signal, status) in SIGNALS {
+        let dir = scratch(&format!("adversarial_signal_write_{signal}"));
+        let target = dir.join("mount.p3f");
+        // The shell makes the FIFO under the name the process it becomes (same PID)
+        // will write through.
+        let child = Command::new("sh")
+            .args([
+                "-c",
+                "mkfifo \"$(dirname \"$1\")/.$(basename \"$1\").$$.partial\" && exec \"$0\" gen mount \
+                 --level 7 -o \"$1\"",
+                env!("CARGO_BIN_EXE_p3trace"),
+                target.to_str().unwrap(),
+            ])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let fifo = dir.join(format!(".mount.p3f.{}.partial", child.id()));
+        let start = Instant::now();
+        while !fifo.exists() {
+            assert!(start.elapsed() < Duration::from_secs(10), "no FIFO made");
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        // A reader that never reads: opening the FIFO for writing succeeds, and the
+        // writes block once its buffer is full.
+        let _reader = std::fs::OpenOptions::new()
+            .read(true)
+            .custom_flags(libc::O_NONBLOCK)
+            .open(&fifo)
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(500));
+        send(signal, &child);
+        let out = stopped(child, signal);
+        let message = stderr(&out);
+        assert_eq!(out.status.code(), Some(status), "SIG{signal}: {message}");
+        assert!(files_in(&dir).is_empty(), "{:?}", files_in(&dir));
+    }
 }
