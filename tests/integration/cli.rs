@@ -2,7 +2,7 @@
 
 use crate::common;
 
-use crate::common::{p3trace, scratch, stderr, stdout};
+use crate::common::{p3trace, scratch, stderr, stdout, succeeds};
 
 fn showcase() -> String {
     common::project_file("scenes/showcase.p3f")
@@ -952,7 +952,7 @@ fn counts_of_one_take_the_singular() {
     )
     .unwrap();
     let image = dir.join("empty.exr");
-    let run = p3trace(&[
+    let run = succeeds(&[
         "render",
         empty.to_str().unwrap(),
         "--stats",
@@ -961,7 +961,6 @@ fn counts_of_one_take_the_singular() {
         "-o",
         image.to_str().unwrap(),
     ]);
-    assert!(run.status.success(), "{}", stderr(&run));
     let printed = stdout(&run);
     for expected in ["(0 interior, 1 leaf)", "(1 primitive)", ", 1 ray, "] {
         assert!(printed.contains(expected), "'{expected}' not in {printed}");
@@ -974,7 +973,7 @@ fn counts_of_one_take_the_singular() {
 
     // A part of one pixel of a 2x1 image leaves one pixel uncovered.
     let part = dir.join("part.exr");
-    let run = p3trace(&[
+    succeeds(&[
         "render",
         scene,
         "--pixel-bounds",
@@ -982,7 +981,6 @@ fn counts_of_one_take_the_singular() {
         "-o",
         part.to_str().unwrap(),
     ]);
-    assert!(run.status.success(), "{}", stderr(&run));
     let merged = dir.join("merged.png");
     let run = p3trace(&[
         "merge",
@@ -1028,13 +1026,11 @@ fn counts_of_one_take_the_singular() {
 fn random_is_a_scene_wherever_a_scene_is_taken() {
     let dir = scratch("cli_random_everywhere");
     let file = dir.join("random3.p3f");
-    let run = p3trace(&["gen", "random", "--seed", "3", "-o", file.to_str().unwrap()]);
-    assert!(run.status.success(), "{}", stderr(&run));
+    succeeds(&["gen", "random", "--seed", "3", "-o", file.to_str().unwrap()]);
     let file = file.to_str().unwrap();
     // All but the scene's name and the build time.
     let described = |args: &[&str]| {
-        let run = p3trace(args);
-        assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+        let run = succeeds(args);
         stdout(&run)
             .lines()
             .filter(|l| !l.starts_with("scene: ") && !l.starts_with("structure: "))
@@ -1058,8 +1054,7 @@ fn random_is_a_scene_wherever_a_scene_is_taken() {
             "--threads",
             "1",
         ];
-        let run = p3trace(&args);
-        assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+        let run = succeeds(&args);
         let text = stdout(&run);
         let geometry = text
             .lines()
@@ -1080,7 +1075,7 @@ fn random_is_a_scene_wherever_a_scene_is_taken() {
 fn info_and_render_stats_describe_the_same_structure() {
     let dir = scratch("cli_same_structure");
     let mount = dir.join("mount6.p3f");
-    let run = p3trace(&[
+    succeeds(&[
         "gen",
         "mount",
         "--level",
@@ -1089,7 +1084,6 @@ fn info_and_render_stats_describe_the_same_structure() {
         "-o",
         mount.to_str().unwrap(),
     ]);
-    assert!(run.status.success(), "{}", stderr(&run));
     let motion = common::project_file("scenes/motion.p3f");
     let image = dir.join("out.png");
     let statistics = |text: &str| -> Vec<String> {
@@ -1115,8 +1109,7 @@ fn info_and_render_stats_describe_the_same_structure() {
             let mut render = vec!["render", scene, "--stats", "--quiet", "--resolution", "4x4"];
             render.extend_from_slice(&["-o", image.to_str().unwrap()]);
             render.extend_from_slice(flags);
-            let run = p3trace(&render);
-            assert!(run.status.success(), "{}", stderr(&run));
+            let run = succeeds(&render);
             assert_eq!(
                 statistics(info),
                 statistics(&stdout(&run)),
@@ -1227,7 +1220,7 @@ fn negative_numbers_get_a_plain_message() {
         "{message}"
     );
     // Shutter times may be negative.
-    let run = p3trace(&[
+    succeeds(&[
         "render",
         &scene,
         "--resolution",
@@ -1237,7 +1230,6 @@ fn negative_numbers_get_a_plain_message() {
         "-o",
         &image,
     ]);
-    assert!(run.status.success(), "{}", stderr(&run));
 }
 
 /// `compare` reads OpenEXR files as the bytes a PNG of the same render holds: an EXR and
@@ -1251,13 +1243,11 @@ fn compare_reads_exr_as_the_png_of_the_same_render() {
         let scene = showcase();
         let mut args = vec!["render", &scene, "--resolution", "32x24", "-o", &path];
         args.extend_from_slice(extra);
-        let run = p3trace(&args);
-        assert!(run.status.success(), "{}", stderr(&run));
+        succeeds(&args);
         path
     };
     let (exr, png) = (render("a.exr", &[]), render("a.png", &[]));
-    let same = p3trace(&["compare", &exr, &png]);
-    assert!(same.status.success(), "{}", stderr(&same));
+    let same = succeeds(&["compare", &exr, &png]);
     let printed = stdout(&same);
     assert!(printed.contains("size: 32x24\n"), "{printed}");
     assert!(printed.contains("psnr: inf dB"), "{printed}");
@@ -1268,8 +1258,7 @@ fn compare_reads_exr_as_the_png_of_the_same_render() {
 
     let bounds = ["--pixel-bounds", "8,24,4,16"];
     let (part_exr, part_png) = (render("p.exr", &bounds), render("p.png", &bounds));
-    let part = p3trace(&["compare", &part_exr, &part_png]);
-    assert!(part.status.success(), "{}", stdout(&part));
+    let part = succeeds(&["compare", &part_exr, &part_png]);
     assert!(stdout(&part).contains("size: 16x12\n"), "{}", stdout(&part));
 
     let other = render("b.exr", &["--spp", "4"]);
@@ -1277,8 +1266,7 @@ fn compare_reads_exr_as_the_png_of_the_same_render() {
     let differ = p3trace(&["compare", &exr, &other, "--diff", &heat]);
     assert_eq!(differ.status.code(), Some(1), "{}", stderr(&differ));
     assert!(!stdout(&differ).contains("max channel difference: 0 levels"));
-    let read_back = p3trace(&["compare", &heat, &heat]);
-    assert!(read_back.status.success(), "{}", stderr(&read_back));
+    let read_back = succeeds(&["compare", &heat, &heat]);
     assert!(stdout(&read_back).contains("size: 32x24\n"));
 }
 
@@ -1360,32 +1348,26 @@ fn gen_names_the_skybox_from_where_the_scene_is_written() {
         let line = text.lines().find(|l| l.starts_with("env ")).unwrap();
         line["env ".len()..].to_string()
     };
+    // The project's skybox `folder`, and the one the scene `file` generated by `gen
+    // KIND ARGS -o FILE` names, as it is read: from the file's folder.
+    let skyboxes = |folder: &str, file: &std::path::Path, kind_and_args: &[&str]| {
+        let out = ["-o", file.to_str().unwrap()];
+        gen_in(&root, &[&["gen"], kind_and_args, &out].concat());
+        let env = env_of(&std::fs::read_to_string(file).unwrap());
+        let named = file.parent().unwrap().join(&env).canonicalize().unwrap();
+        (root.join(folder).canonicalize().unwrap(), named, env)
+    };
     let scene = elsewhere.join("balls.p3f");
-    gen_in(
-        &root,
-        &[
-            "gen",
-            "balls",
-            "--depth",
-            "1",
-            "-o",
-            scene.to_str().unwrap(),
-        ],
-    );
-    let env = env_of(&std::fs::read_to_string(&scene).unwrap());
+    let (project_sky, named, env) = skyboxes("scenes/sky_zup", &scene, &["balls", "--depth", "1"]);
+    assert_eq!(named, project_sky);
     assert!(env.starts_with("../"), "relative: {env}");
-    assert_eq!(
-        elsewhere.join(&env).canonicalize().unwrap(),
-        root.join("scenes/sky_zup").canonicalize().unwrap()
-    );
     // It renders with its sky: unlike the same render without it, and without a warning.
     let render = |extra: &[&str], name: &str| {
         let image = dir.join(name).display().to_string();
         let mut args = vec!["render", scene.to_str().unwrap(), "--resolution", "16x12"];
         args.extend_from_slice(&["-o", &image]);
         args.extend_from_slice(extra);
-        let run = p3trace(&args);
-        assert!(run.status.success(), "{}", stderr(&run));
+        let run = succeeds(&args);
         assert!(!stderr(&run).contains("warning"), "{}", stderr(&run));
         std::fs::read(&image).unwrap()
     };
@@ -1395,22 +1377,9 @@ fn gen_names_the_skybox_from_where_the_scene_is_written() {
     );
     // --env names a folder from the current one, like every other path.
     let random = elsewhere.join("random.p3f");
-    gen_in(
-        &root,
-        &[
-            "gen",
-            "random",
-            "--env",
-            "scenes/sky_yup",
-            "-o",
-            random.to_str().unwrap(),
-        ],
-    );
-    let env = env_of(&std::fs::read_to_string(&random).unwrap());
-    assert_eq!(
-        elsewhere.join(&env).canonicalize().unwrap(),
-        root.join("scenes/sky_yup").canonicalize().unwrap()
-    );
+    let args = ["random", "--env", "scenes/sky_yup"];
+    let (project_sky, named, _) = skyboxes("scenes/sky_yup", &random, &args);
+    assert_eq!(named, project_sky);
 
     // In a project's scenes/ folder, the committed file, byte for byte.
     let project = dir.join("project");
