@@ -8,6 +8,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::accel::Tracer;
+use crate::plural::count;
 use crate::prim::PrimKind;
 use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::scene::{Light, Scene};
@@ -244,9 +245,14 @@ pub fn run(
                     Some(one) if (one.hits, one.tsum) == (r.hits, r.tsum) => {}
                     Some(one) => {
                         return Err(format!(
-                            "{}: {api} with {n} threads gave hits {} tsum {:.3}, \
+                            "{}: {api} with {} gave hits {} tsum {:.3}, \
                              the first path hits {} tsum {:.3}",
-                            set.name, r.hits, r.tsum, one.hits, one.tsum
+                            set.name,
+                            count(n as u64, "thread", "threads"),
+                            r.hits,
+                            r.tsum,
+                            one.hits,
+                            one.tsum
                         ))
                     }
                 }

@@ -1,9 +1,11 @@
 //! The command line: clap definitions and the plain option structs they become.
 
+use std::ops::RangeInclusive;
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use p3trace::generate::{mountain, sphereflake};
+use p3trace::limits::MAX_SPP_SIDE;
 use p3trace::render::light::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
 use p3trace::render::region::TileIndex;
 
@@ -12,8 +14,10 @@ use p3trace::render::region::TileIndex;
     name = "p3trace",
     version = p3trace::machine::LONG_VERSION,
     about = "A fast Whitted and distribution ray tracer for P3F scenes (the P3D course format)",
-    after_help = "Exit status: 0 success, 1 a render or I/O failure, 2 bad usage or a bad scene, \
-                  130 interrupted (Ctrl-C, SIGTERM or SIGHUP)."
+    after_help = "Exit status: 0 success, 1 a render or I/O failure (an output that cannot be \
+                  written is refused before the work), 2 bad usage or a bad scene, 128 + N \
+                  after signal N, the partial file removed: 130 Ctrl-C (SIGINT), 143 \
+                  SIGTERM, 129 SIGHUP."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -25,13 +29,9 @@ pub enum Command {
     /// Render a P3F scene to an image.
     Render(RenderArgs),
     /// Print what a scene holds (objects by kind, materials, lights, camera) and the
-    /// statistics of its acceleration structure.
-    Info {
-        /// The P3F scene file.
-        scene: PathBuf,
-        #[command(flatten)]
-        accel: AccelArgs,
-    },
+    /// statistics of its acceleration structure, built as `render` builds it (the same
+    /// lines as `render --stats` with the same --profile and structure flags).
+    Info(InfoArgs),
     /// Print how two images differ; exit 1 when too few pixels are within the tolerance.
     Compare(CompareArgs),
     /// Assemble the EXR parts of a frame rendered in regions (render --tile, --crop or
@@ -64,8 +64,8 @@ pub enum GenCommand {
     /// balls_low (10 spheres), balls_medium (91) and balls_high (7381).
     Balls {
         /// Levels of children below the central sphere: (9^(D+1) - 1) / 8 spheres.
-        #[arg(long, value_name = "D", default_value_t = 2,
-              value_parser = clap::value_parser!(u32).range(0..=sphereflake::MAX_DEPTH as i64))]
+        #[arg(long, value_name = "D", default_value_t = 2, allow_negative_numbers = true,
+              value_parser = whole::<u32>(0..=sphereflake::MAX_DEPTH.into()))]
         depth: u32,
         #[command(flatten)]
         out: SceneOutput,
@@ -74,11 +74,12 @@ pub enum GenCommand {
     /// levels 1, 5 and 7 give mount_low (8), mount_high (2048) and mount_very_high (32768).
     Mount {
         /// Subdivisions of the two base triangles.
-        #[arg(long, value_name = "L", default_value_t = 5,
-              value_parser = clap::value_parser!(u32).range(0..=mountain::MAX_LEVEL as i64))]
+        #[arg(long, value_name = "L", default_value_t = 5, allow_negative_numbers = true,
+              value_parser = whole::<u32>(0..=mountain::MAX_LEVEL.into()))]
         level: u32,
         /// Seed of the random displacements; every level refines the same mountain.
-        #[arg(long, value_name = "N", default_value_t = 0)]
+        #[arg(long, value_name = "N", default_value_t = 0, allow_negative_numbers = true,
+              value_parser = whole::<u64>(0..=u64::MAX))]
         seed: u64,
         #[command(flatten)]
         out: SceneOutput,
@@ -87,7 +88,8 @@ pub enum GenCommand {
     /// spheres around three large ones.
     Random {
         /// Seed of the positions and materials.
-        #[arg(long, value_name = "N", default_value_t = 0)]
+        #[arg(long, value_name = "N", default_value_t = 0, allow_negative_numbers = true,
+              value_parser = whole::<u64>(0..=u64::MAX))]
         seed: u64,
         #[command(flatten)]
         out: SceneOutput,
@@ -112,8 +114,8 @@ pub enum GenCommand {
         #[arg(long, value_enum, default_value_t = UpAxis::Z)]
         up: UpAxis,
         /// Texels along each side of a face.
-        #[arg(long, value_name = "N", default_value_t = 256,
-              value_parser = clap::value_parser!(u32).range(2..=8192))]
+        #[arg(long, value_name = "N", default_value_t = 256, allow_negative_numbers = true,
+              value_parser = whole::<u32>(2..=8192))]
         size: u32,
         /// The folder to write right/left/top/bottom/front/back.png into.
         #[arg(short, long, value_name = "DIR")]
@@ -123,11 +125,16 @@ pub enum GenCommand {
 
 #[derive(Args, Debug)]
 pub struct SceneOutput {
-    /// Where to write the scene (default: standard output).
+    /// Where to write the scene (default: standard output). The skybox is named from the
+    /// file's folder, so a scene meant for another folder is best written there with -o
+    /// rather than through a redirection of standard output.
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
-    /// The skybox folder for the scene's `env` line, relative to the scene file.
-    /// Default: the project's sky_zup (Z-up scenes) or sky_yup (Y-up scenes); the random
+    /// The skybox folder for the scene's `env` line, as a path from the current folder
+    /// (an absolute one is written as it is). The scene names it from its own folder with
+    /// -o FILE (relative where the two share more than the root, else absolute), from the
+    /// current folder on standard output. Default: the project's scenes/sky_zup (Z-up
+    /// scenes) or scenes/sky_yup (Y-up scenes), from the project's folder; the random
     /// scene has none.
     #[arg(long, value_name = "DIR", conflicts_with = "no_env")]
     pub env: Option<String>,
@@ -165,16 +172,41 @@ pub enum UpAxis {
     Z,
 }
 
+/// The most samples per pixel: the file's largest grid.
+const MAX_SPP: u32 = MAX_SPP_SIDE * MAX_SPP_SIDE;
+
+/// What the scene argument of `render`, `info` and `bench` may be.
+const SCENE_HELP: &str = "The P3F scene file, or `random` for the course's random scene \
+                          (P3F.md section 8) laid out by --seed (a file named random is \
+                          `./random`)";
+
+#[derive(Args, Debug)]
+pub struct InfoArgs {
+    #[arg(help = SCENE_HELP)]
+    pub scene: PathBuf,
+    /// The layout of the `random` scene.
+    #[arg(long, value_name = "N", default_value_t = 0, allow_negative_numbers = true,
+          value_parser = whole::<u64>(0..=u64::MAX))]
+    pub seed: u64,
+    /// Build the structure as `render --profile PROFILE` does: standard stores positions
+    /// relative to the camera, course in the file's coordinates, and the binned SAH build
+    /// can split the two a little differently.
+    #[arg(long, value_enum, value_name = "PROFILE", default_value_t = ProfileChoice::Standard)]
+    pub profile: ProfileChoice,
+    #[command(flatten)]
+    pub accel: AccelArgs,
+}
+
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// The P3F scene file, or `random` for the course's random scene (P3F.md section 8)
-    /// laid out by --seed (a file named random is `./random`).
+    #[arg(help = SCENE_HELP)]
     pub scene: PathBuf,
     /// Output image; the extension picks the format: .png (8-bit), .ppm (8-bit binary
     /// P6), .hdr (linear floating point) or .exr (OpenEXR, linear 32-bit float, with the
     /// scene's hash and the settings that change pixels in its `p3trace` attribute: the
     /// format of a farm's parts). Default: the scene's name with .png, in the current
-    /// folder.
+    /// folder. An output that cannot be written (its folder missing, say) is refused
+    /// before the scene is read, with exit status 1; so is a --json FILE.
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
     /// Render only the pixels of this window, given as fractions of the image with y
@@ -182,31 +214,33 @@ pub struct RenderArgs {
     /// ceil(Y0 H) to ceil(Y1 H), last ones excluded. An .exr output keeps the window's
     /// place in the whole image (its data window); other formats hold the window alone.
     #[arg(long, value_name = "X0,X1,Y0,Y1", value_parser = parse_crop,
-          group = "region")]
+          group = "region", allow_hyphen_values = true)]
     pub crop: Option<[f64; 4]>,
     /// Render only pixels x0 <= x < x1, y0 <= y < y1, y from the top (pbrt's
     /// --pixelbounds); written as for --crop.
     #[arg(long, value_name = "x0,x1,y0,y1", value_parser = parse_pixel_bounds,
-          group = "region")]
+          group = "region", allow_hyphen_values = true)]
     pub pixel_bounds: Option<[u32; 4]>,
     /// Render only tile I of N (0 <= I < N), for job arrays: the image cut into N
     /// horizontal bands of whole rows from the top, rows floor(I H / N) to
     /// floor((I + 1) H / N), so band heights differ by one row at most (N <= H). Write
     /// it as .exr for `p3trace merge`, which names the missing tiles of a frame.
-    #[arg(long, value_name = "I/N", group = "region")]
+    #[arg(long, value_name = "I/N", group = "region", allow_hyphen_values = true)]
     pub tile: Option<TileIndex>,
     /// Image size, overriding the scene's `resolution` (for example 1024x768).
-    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution, allow_hyphen_values = true)]
     pub resolution: Option<(u32, u32)>,
     /// Samples per pixel, any N >= 1: an a x b jittered grid with a x b = N, a >= b as
     /// close as possible (8 is 4 x 2, 7 is 7 x 1, 16 is 4 x 4); 1 is one sample at the
     /// pixel centre. The scene's `spp k` means k x k samples (the course's meaning), so
     /// `spp 4` in a file is --spp 16. Default: the scene's `spp k`, or the centre for 0.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = whole::<u32>(1..=MAX_SPP.into()))]
     pub spp: Option<u32>,
     /// Depth at which rays stop spawning reflection and refraction rays (primary rays
     /// have depth 1). Default: the profile's, 6 (standard) or 8 (course).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=64))]
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = whole::<u32>(1..=64))]
     pub max_depth: Option<u32>,
     /// The shading model: standard (P3F.md section 4) or course (section 11: the course
     /// renderer's own, which reproduces its reference images: the background seen by a
@@ -221,20 +255,22 @@ pub struct RenderArgs {
     #[arg(long)]
     pub no_skybox: bool,
     /// Worker threads (default: one per core).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = whole::<u32>(1..=1024))]
     pub threads: Option<u32>,
     /// Seed of every random number: jittered samples, lens, soft-light and fuzz
     /// points, shutter times (and the layout of the `random` scene).
-    #[arg(long, value_name = "N", default_value_t = 0)]
+    #[arg(long, value_name = "N", default_value_t = 0, allow_negative_numbers = true,
+          value_parser = whole::<u64>(0..=u64::MAX))]
     pub seed: u64,
     /// Depth of field: the lens radius in pixel widths of the scene's `resolution`
     /// (so a preview at another --resolution shows the same blur), overriding the
     /// scene's `aperture` (0 is a pinhole).
-    #[arg(long, value_name = "A", value_parser = parse_aperture)]
+    #[arg(long, value_name = "A", value_parser = parse_aperture, allow_negative_numbers = true)]
     pub aperture: Option<f32>,
     /// Depth of field: the distance of the focal plane as a multiple of the distance
     /// from `from` to `at`, overriding the scene's `focal`.
-    #[arg(long, value_name = "F", value_parser = parse_focal)]
+    #[arg(long, value_name = "F", value_parser = parse_focal, allow_negative_numbers = true)]
     pub focal: Option<f32>,
     /// Soft shadows: each point light becomes a square (see --light-size) perpendicular
     /// to the camera's up vector. With one sample per pixel the square becomes a grid of
@@ -245,22 +281,22 @@ pub struct RenderArgs {
     pub soft_shadows: bool,
     /// The side of a soft light's square, in scene units.
     #[arg(long, value_name = "S", requires = "soft_shadows", value_parser = parse_light_size,
-          default_value_t = DEFAULT_LIGHT_SIZE)]
+          default_value_t = DEFAULT_LIGHT_SIZE, allow_negative_numbers = true)]
     pub light_size: f32,
     /// N: with one sample per pixel, each soft or area light becomes N point lights, an
     /// a x b grid as for --spp (the default 16 is 4 x 4).
     #[arg(long, value_name = "N", default_value_t = DEFAULT_LIGHT_GRID.cells(),
-          value_parser = clap::value_parser!(u32).range(1..=4096))]
+          allow_negative_numbers = true, value_parser = whole::<u32>(1..=4096))]
     pub light_samples: u32,
     /// Fuzzy reflections: a reflected direction r becomes normalize(r + G q), q uniform
     /// in the unit ball; G in [0, 1], 0 is a mirror. Without a value: 0.2.
     #[arg(long, value_name = "G", num_args = 0..=1, default_missing_value = "0.2",
-          value_parser = parse_roughness)]
+          value_parser = parse_roughness, allow_negative_numbers = true)]
     pub roughness: Option<f32>,
     /// Motion blur: the shutter interval; each primary sample takes a time uniform in it,
     /// and the rays it spawns keep that time. Default: 0,0.3 when the scene has moving
     /// spheres, else 0,0; T0,T0 renders the instant T0 without blur.
-    #[arg(long, value_name = "T0,T1", value_parser = parse_shutter)]
+    #[arg(long, value_name = "T0,T1", value_parser = parse_shutter, allow_hyphen_values = true)]
     pub shutter: Option<[f32; 2]>,
     /// How rays travel: stream (a tile's rays depth by depth, each depth's rays and shadow
     /// rays eight at a time) or scalar (one at a time, the reference). Both give the same
@@ -300,21 +336,27 @@ pub struct MergeArgs {
     pub missing: bool,
     /// The frame was split into N tiles: name missing tiles in tiles of N even when no
     /// part was rendered with --tile N (or none exists yet, when --missing lists all N).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = whole::<u32>(1..=u32::MAX.into()))]
     pub tiles: Option<u32>,
 }
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// The P3F scene file.
+    #[arg(help = SCENE_HELP)]
     pub scene: PathBuf,
+    /// The layout of the `random` scene.
+    #[arg(long, value_name = "N", default_value_t = 0, allow_negative_numbers = true,
+          value_parser = whole::<u64>(0..=u64::MAX))]
+    pub seed: u64,
     /// Threads of the multi-threaded runs (a 1-thread run always comes first).
     /// Default: one per core.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = whole::<u32>(1..=1024))]
     pub threads: Option<u32>,
     /// Passes over each ray set; the fastest is reported.
-    #[arg(long, value_name = "N", default_value_t = 7,
-          value_parser = clap::value_parser!(u32).range(1..=1000))]
+    #[arg(long, value_name = "N", default_value_t = 7, allow_negative_numbers = true,
+          value_parser = whole::<u32>(1..=1000))]
     pub reps: u32,
     /// Also write the run as one JSON object to FILE, or to standard output for `-`
     /// (the text lines then go to stderr): version, commit, CPU, scene, structure and
@@ -340,11 +382,12 @@ pub struct AccelArgs {
     /// Children per BVH node during traversal: 2 (the tree as built) or 8 (collapsed to
     /// 8-wide nodes whose boxes one ray tests together). Default: 8 for sah, 2 for
     /// midpoint (the report's binary traversal).
-    #[arg(long, value_name = "N", value_parser = parse_bvh_width)]
+    #[arg(long, value_name = "N", value_parser = parse_bvh_width, allow_negative_numbers = true)]
     pub bvh_width: Option<u32>,
     /// The grid's density m: floor(m * w * (N / V)^(1/3)) + 1 cells along an axis of
     /// width w, for N objects in a box of volume V.
-    #[arg(long, value_name = "M", default_value_t = 2.0, value_parser = parse_density)]
+    #[arg(long, value_name = "M", default_value_t = 2.0, value_parser = parse_density,
+          allow_negative_numbers = true)]
     pub grid_density: f32,
     /// Grid only: test an object that spans several cells once per ray (mailboxing).
     #[arg(long)]
@@ -400,32 +443,79 @@ fn parse_density(text: &str) -> Result<f32, String> {
 
 #[derive(Args, Debug)]
 pub struct CompareArgs {
+    /// An image: PNG, PPM, JPEG, HDR or OpenEXR. An EXR file's linear floats are compared
+    /// as the bytes a PNG of the same render holds (floor(255.99 x), clamped), so that
+    /// `compare a.exr a.png` of one render finds them equal; an EXR region is its data
+    /// window, as the region's PNG holds it.
     pub first: PathBuf,
+    /// The image to compare it with, of the same size, in any of those formats.
     pub second: PathBuf,
     /// Largest channel difference, in 8-bit levels, for a pixel to count as matching.
-    #[arg(long, value_name = "N", default_value_t = 0.0)]
+    #[arg(long, value_name = "N", default_value_t = 0.0, value_parser = parse_tolerance,
+          allow_negative_numbers = true)]
     pub tolerance: f32,
     /// Percentage of pixels that must match for the images to count as equal.
-    #[arg(long, value_name = "PERCENT", default_value_t = 100.0)]
+    #[arg(long, value_name = "PERCENT", default_value_t = 100.0, value_parser = parse_percentage,
+          allow_negative_numbers = true)]
     pub min_match: f64,
     /// Also write a heat map of where the images differ: each pixel's largest channel
     /// difference, black where equal, then blue, red and yellow up to white at the largest
-    /// difference found (the output line gives it in levels). The extension picks the
-    /// format: .png, .ppm, .hdr or .exr.
+    /// difference found, or at --diff-scale (the output line gives it in levels). The
+    /// extension picks the format: .png, .ppm, .hdr or .exr.
     #[arg(long, value_name = "FILE")]
     pub diff: Option<PathBuf>,
+    /// The difference, in levels, that the heat map of --diff draws white; larger ones
+    /// are white too. A small scale shows differences of a level or two that a large one
+    /// elsewhere in the image would leave black. Default: the largest difference found.
+    #[arg(long, value_name = "N", requires = "diff", value_parser = parse_diff_scale,
+          allow_negative_numbers = true)]
+    pub diff_scale: Option<f32>,
 }
 
 /// A number in `range`; `what` names it in the message.
-fn number_in(
+fn number_in<T: std::str::FromStr + PartialOrd>(
     text: &str,
     what: &str,
-    range: impl std::ops::RangeBounds<f32>,
-) -> Result<f32, String> {
-    match text.trim().parse::<f32>() {
+    range: impl std::ops::RangeBounds<T>,
+) -> Result<T, String> {
+    match text.trim().parse::<T>() {
         Ok(x) if range.contains(&x) => Ok(x),
         _ => Err(format!("'{text}' is not {what}")),
     }
+}
+
+/// A parser of the whole numbers in `range`, whose message says what they may be. With
+/// `allow_negative_numbers` on its argument, a negative number reaches it too, where clap
+/// would otherwise suggest writing `-- -1`.
+fn whole<T: TryFrom<u64>>(
+    range: RangeInclusive<u64>,
+) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static {
+    move |text: &str| {
+        let (min, max) = (range.start(), range.end());
+        text.trim()
+            .parse::<u64>()
+            .ok()
+            .filter(|n| range.contains(n))
+            .and_then(|n| T::try_from(n).ok())
+            .ok_or_else(|| match *max {
+                u64::MAX => format!("'{text}' is not a whole number of at least {min}"),
+                _ => format!("'{text}' is not a whole number from {min} to {max}"),
+            })
+    }
+}
+
+fn parse_tolerance(text: &str) -> Result<f32, String> {
+    number_in(text, "a tolerance of 0 levels or more", 0.0..)
+}
+
+fn parse_diff_scale(text: &str) -> Result<f32, String> {
+    use std::ops::Bound;
+    let above_zero = (Bound::Excluded(0.0), Bound::Included(f32::MAX));
+    number_in(text, "a difference of more than 0 levels", above_zero)
+}
+
+fn parse_percentage(text: &str) -> Result<f64, String> {
+    number_in(text, "a percentage from 0 to 100", 0.0..=100.0)
 }
 
 fn parse_aperture(text: &str) -> Result<f32, String> {

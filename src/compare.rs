@@ -6,6 +6,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
+use crate::plural::noun;
 use crate::render::film::Film;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -32,9 +33,30 @@ pub struct Levels {
     pub rgb: Vec<f32>,
 }
 
-/// Reads a PNG, PPM, JPEG or HDR image.
+/// A difference in levels, with its noun: `1 level`, `2.5 levels`.
+pub fn levels(n: f32) -> String {
+    format!("{n} {}", noun(n.into(), "level", "levels"))
+}
+
+/// Reads a PNG, PPM, JPEG, HDR or OpenEXR image. An EXR file's linear floats become the
+/// bytes a PNG of the same render holds (`floor(255.99 x)`, clamped: [`Film::to_rgb8`]),
+/// so that a render compares equal to itself in either format; an HDR file's floats are
+/// taken as they are, times 255.
 pub fn load(path: &Path) -> Result<Levels, String> {
-    let image = image::open(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let cannot = |e: &dyn std::fmt::Display| format!("cannot read {}: {e}", path.display());
+    let exr = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if exr {
+        let bytes = std::fs::read(path).map_err(|e| cannot(&e))?;
+        let film = Film::read_exr(&bytes).map_err(|e| cannot(&e))?;
+        return Ok(Levels {
+            width: film.width,
+            height: film.height,
+            rgb: film.to_rgb8().into_iter().map(f32::from).collect(),
+        });
+    }
+    let image = image::open(path).map_err(|e| cannot(&e))?;
     let rgb = image.to_rgb32f();
     Ok(Levels {
         width: rgb.width(),
@@ -79,8 +101,8 @@ pub fn compare(a: &Levels, b: &Levels, tolerance: f32) -> Result<Comparison, Str
     })
 }
 
-/// The heat ramp's colours at 0, 1/4, 1/2, 3/4 and 1 of the largest difference: black,
-/// blue, red, yellow, white, each brighter than the one before.
+/// The heat ramp's colours at 0, 1/4, 1/2, 3/4 and 1 of the full scale: black, blue, red,
+/// yellow, white, each brighter than the one before.
 const HEAT_RAMP: [Vec3; 5] = [
     Vec3::ZERO,
     Vec3::new(0.0, 0.0, 1.0),
@@ -89,36 +111,37 @@ const HEAT_RAMP: [Vec3; 5] = [
     Vec3::ONE,
 ];
 
-/// The least share of the largest difference that a differing pixel is drawn at: one
-/// level of blue, so that black means equal however small the difference.
+/// The least share of the full scale that a differing pixel is drawn at: one level of
+/// blue, so that black means equal however small the difference.
 const LEAST_VISIBLE: f32 = 1.0 / (4.0 * 255.0);
 
 impl Comparison {
     /// A picture of where the images differ: each pixel's largest channel difference on
-    /// the heat ramp, black where the images are equal and white at the largest
-    /// difference found ([`Comparison::heat_map_scale`] says it in words).
-    pub fn heat_map(&self) -> Film {
+    /// the heat ramp, black where the images are equal and white at `full` levels (and
+    /// beyond), by default the largest difference found ([`Comparison::heat_map_scale`]
+    /// says it in words). A full scale below the largest difference shows differences of
+    /// a level or two that the largest would leave near black.
+    pub fn heat_map(&self, full: Option<f32>) -> Film {
+        let full = full.unwrap_or(self.max_difference);
         let mut film = Film::new(self.width, self.height);
         for (pixel, &difference) in film.pixels.iter_mut().zip(&self.pixel_differences) {
-            *pixel = heat(difference / self.max_difference);
+            *pixel = heat(difference / full);
         }
         film
     }
 
-    /// What the heat map's colours mean, in levels.
-    pub fn heat_map_scale(&self) -> String {
-        if self.max_difference > 0.0 {
-            format!(
-                "black 0 levels, then blue, red, yellow, white {} levels",
-                self.max_difference
-            )
-        } else {
-            "all black: no pixel differs".to_string()
+    /// What the colours of [`Comparison::heat_map`]`(full)` mean, in levels.
+    pub fn heat_map_scale(&self, full: Option<f32>) -> String {
+        let ramp = "black 0 levels, then blue, red, yellow, white";
+        match full {
+            _ if !(self.max_difference > 0.0) => "all black: no pixel differs".to_string(),
+            None => format!("{ramp} {}", levels(self.max_difference)),
+            Some(full) => format!("{ramp} {} or more", levels(full)),
         }
     }
 }
 
-/// The heat ramp's colour at `share` (0 to 1) of the largest difference; black for 0 and
+/// The heat ramp's colour at `share` of the full scale, white from 1 on; black for 0 and
 /// for NaN (equal images' 0 / 0).
 fn heat(share: f32) -> Vec3 {
     if !(share > 0.0) {
@@ -325,20 +348,42 @@ mod tests {
         let a = image(vec![0.; 12]);
         let b = image(vec![0., 0., 0., 0., 0., 1., 0., 120., 0., 255., 0., 0.]);
         let c = compare(&a, &b, 0.0).unwrap();
-        let map = c.heat_map();
+        let map = c.heat_map(None);
         assert_eq!((map.width, map.height), (4, 1));
         let bytes = map.to_rgb8();
         assert_eq!(bytes[0..3], [0, 0, 0], "equal pixel");
         assert_ne!(bytes[3..6], [0, 0, 0], "one level of 255 still shows");
         assert_eq!(bytes[9..12], [255, 255, 255], "the largest difference");
         assert_eq!(
-            c.heat_map_scale(),
+            c.heat_map_scale(None),
             "black 0 levels, then blue, red, yellow, white 255 levels"
         );
 
         let same = compare(&a, &a, 0.0).unwrap();
-        assert!(same.heat_map().pixels.iter().all(|p| *p == Vec3::ZERO));
-        assert_eq!(same.heat_map_scale(), "all black: no pixel differs");
+        for full in [None, Some(2.0)] {
+            assert!(same.heat_map(full).pixels.iter().all(|p| *p == Vec3::ZERO));
+            assert_eq!(same.heat_map_scale(full), "all black: no pixel differs");
+        }
+    }
+
+    #[test]
+    fn a_full_scale_shows_small_differences_and_saturates_larger_ones() {
+        let a = image(vec![0.; 12]);
+        let b = image(vec![0., 0., 0., 1., 0., 0., 0., 2., 0., 0., 0., 255.]);
+        let c = compare(&a, &b, 0.0).unwrap();
+        let bytes = c.heat_map(Some(2.0)).to_rgb8();
+        assert_eq!(bytes[0..3], [0, 0, 0], "equal pixel");
+        assert_eq!(bytes[3..6], [255, 0, 0], "half the scale is red");
+        assert_eq!(bytes[6..9], [255, 255, 255], "the full scale is white");
+        assert_eq!(bytes[9..12], [255, 255, 255], "beyond it, white too");
+        assert_eq!(
+            c.heat_map_scale(Some(2.0)),
+            "black 0 levels, then blue, red, yellow, white 2 levels or more"
+        );
+        assert_eq!(
+            c.heat_map_scale(Some(1.0)),
+            "black 0 levels, then blue, red, yellow, white 1 level or more"
+        );
     }
 
     #[test]

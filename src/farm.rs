@@ -12,7 +12,7 @@ use std::io::Cursor;
 use glam::Vec3;
 
 use crate::limits::check_image_size;
-use crate::render::film::{Film, Placement, EXR_NOTE};
+use crate::render::film::{read_exr_pixels, Film, Placement, EXR_NOTE};
 use crate::render::region::{Region, TileIndex};
 use crate::render::{RenderOptions, Sampling};
 use crate::scene::Scene;
@@ -214,7 +214,7 @@ pub fn read_part(bytes: &[u8], name: &str) -> Result<Part, String> {
             )));
         }
     }
-    let pixels = read_pixels(bytes, region).map_err(&bad)?;
+    let pixels = read_exr_pixels(bytes, region.width(), region.height()).map_err(&bad)?;
     Ok(Part {
         name: name.to_string(),
         identity,
@@ -223,37 +223,6 @@ pub fn read_part(bytes: &[u8], name: &str) -> Result<Part, String> {
         region,
         pixels,
     })
-}
-
-/// The pixels of a file whose header [`read_part`] has checked.
-fn read_pixels(bytes: &[u8], region: Region) -> Result<Vec<Vec3>, String> {
-    use exr::prelude::{ReadChannels, ReadLayers, ReadSpecificChannel};
-    let width = region.width() as usize;
-    let image = exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .specific_channels()
-        .required("R")
-        .required("G")
-        .required("B")
-        .collect_pixels(
-            move |size, _| vec![Vec3::ZERO; size.width() * size.height()],
-            move |pixels: &mut Vec<Vec3>, at, (r, g, b): (f32, f32, f32)| {
-                if let Some(p) = pixels.get_mut(at.y() * width + at.x()) {
-                    *p = Vec3::new(r, g, b);
-                }
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .non_parallel()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(|e| format!("unreadable pixels ({e})"))?;
-    let pixels = image.layer_data.channel_data.pixels;
-    if pixels.len() as u64 != region.pixels() {
-        return Err("its pixels do not fill its data window".into());
-    }
-    Ok(pixels)
 }
 
 /// The frame being assembled, one part at a time (a part's pixels can be dropped once

@@ -15,6 +15,7 @@
 //! - [`farm`] writes, reads and merges the parts of a frame split over many machines.
 //! - [`mod@bench`] runs the trace-throughput protocol of `../shared/bench/PROTOCOL.md`.
 //! - [`machine`] says what the binary was built for and what the CPU offers.
+//! - [`plural`] writes counts with their noun, singular or plural.
 
 // Tests like `!(x > 0.0)` are deliberate: they must also reject NaN, which `x <= 0.0` lets
 // through.
@@ -29,6 +30,7 @@ pub mod intersect;
 pub mod limits;
 pub mod machine;
 pub mod output;
+pub mod plural;
 pub mod prim;
 pub mod ray;
 pub mod render;

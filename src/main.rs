@@ -1,24 +1,27 @@
 //! The `p3trace` command: parses the command line, calls the library, and maps failures
-//! to exit codes (1 a render or I/O failure, 2 bad usage or a bad scene, 130 Ctrl-C).
+//! to exit codes (1 a render or I/O failure, 2 bad usage or a bad scene, 128 + N after
+//! signal N: 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP).
 
 mod cli;
 mod manual;
 mod statistics;
 
 use std::io::{IsTerminal, Write};
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{CommandFactory, Parser};
 
 use cli::{
-    AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand, MergeArgs,
-    ModeChoice, ProfileChoice, RenderArgs, SceneOutput, UpAxis,
+    AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand, InfoArgs,
+    MergeArgs, ModeChoice, ProfileChoice, RenderArgs, SceneOutput, UpAxis,
 };
 use p3trace::accel::{Accel, AccelKind, AccelOptions};
 use p3trace::accel::{BvhBuild, BvhWidth};
+use p3trace::compare::levels;
 use p3trace::farm::{self, Canvas};
 use p3trace::generate::{dragon, mountain, random, skybox, sphereflake};
+use p3trace::plural::{count, noun};
 use p3trace::prim::PrimKind;
 use p3trace::render::film::{OutputFormat, Placement};
 use p3trace::render::progress::Progress;
@@ -36,10 +39,6 @@ enum Failure {
     Run(String),
 }
 
-/// The exit status after Ctrl-C: 128 + SIGINT, as a shell reports a process it stopped.
-/// SIGTERM and SIGHUP take the same way out, with the same status.
-const INTERRUPTED: i32 = 130;
-
 fn main() -> ExitCode {
     // First, before any code that may use them: a CPU without the instructions the
     // binary was compiled for would otherwise die of an illegal instruction.
@@ -51,18 +50,12 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    // On Ctrl-C, SIGTERM or SIGHUP, remove the file being written, if any, and leave.
-    // Should the handler fail to install, the signals keep their default action: the
-    // target is still never truncated, but a `.partial` file may stay.
-    let _ = ctrlc::set_handler(|| {
-        let _held_until_exit = p3trace::output::abandon_partial_files();
-        eprintln!("p3trace: interrupted");
-        std::process::exit(INTERRUPTED);
-    });
+    #[cfg(unix)]
+    exit_cleanly_on_signals();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => run_render(&args),
-        Command::Info { scene, accel } => run_info(&scene, &accel),
+        Command::Info(args) => run_info(&args),
         Command::Compare(args) => run_compare(&args),
         Command::Merge(args) => run_merge(&args),
         Command::Gen(command) => run_gen(command),
@@ -84,6 +77,55 @@ fn main() -> ExitCode {
         Err(Failure::Run(message)) => {
             eprintln!("p3trace: error: {message}");
             ExitCode::from(1)
+        }
+    }
+}
+
+/// On Ctrl-C (SIGINT), SIGTERM or SIGHUP: removes the file being written, if any, and
+/// exits 128 + the signal's number, the status a shell gives a process the signal ended.
+/// The signals are blocked in every thread (threads inherit the mask: this runs before
+/// any other exists) and taken by one that waits for them, so the cleanup runs as
+/// ordinary code, not in a signal handler. Should that thread fail to start, the signals
+/// keep their default action: the target is still never truncated, but a `.partial` file
+/// may stay.
+#[cfg(unix)]
+fn exit_cleanly_on_signals() {
+    const SIGNALS: [(libc::c_int, &str); 3] = [
+        (libc::SIGINT, "SIGINT"),
+        (libc::SIGTERM, "SIGTERM"),
+        (libc::SIGHUP, "SIGHUP"),
+    ];
+    // SAFETY: `set` is initialised by sigemptyset before use, and the mask changes this
+    // thread's only.
+    let set = unsafe {
+        let mut set: libc::sigset_t = std::mem::zeroed();
+        libc::sigemptyset(&mut set);
+        for (signal, _) in SIGNALS {
+            libc::sigaddset(&mut set, signal);
+        }
+        if libc::pthread_sigmask(libc::SIG_BLOCK, &set, std::ptr::null_mut()) != 0 {
+            return;
+        }
+        set
+    };
+    let waiter = std::thread::Builder::new()
+        .name("signals".into())
+        .spawn(move || loop {
+            let mut signal = 0;
+            // SAFETY: `set` is a valid signal set and `signal` a place for the answer;
+            // sigwait fails only for an invalid set.
+            if unsafe { libc::sigwait(&set, &mut signal) } != 0 {
+                continue;
+            }
+            let _held_until_exit = p3trace::output::abandon_partial_files();
+            let name = SIGNALS.iter().find(|(s, _)| *s == signal).map(|(_, n)| *n);
+            eprintln!("p3trace: interrupted ({})", name.unwrap_or("a signal"));
+            std::process::exit(128 + signal);
+        });
+    if waiter.is_err() {
+        // SAFETY: as above.
+        unsafe {
+            libc::pthread_sigmask(libc::SIG_UNBLOCK, &set, std::ptr::null_mut());
         }
     }
 }
@@ -120,13 +162,40 @@ fn samples_label(sampling: Sampling) -> String {
     }
 }
 
-/// Reads and parses the scene at `path`: a file that cannot be read is an I/O failure
-/// (exit 1), a bad scene a usage one (exit 2, at its `file:line:col`).
-fn load_scene(path: &Path, frame: Frame) -> Result<Scene, Failure> {
-    let scene = scene::parse_file_in(path, frame).map_err(|e| match e {
+/// The scene argument that names the course's random scene rather than a file.
+const RANDOM_SCENE: &str = "random";
+
+/// Reads the scene `path` names in `frame`: a P3F file, or for `random` the course's
+/// random scene laid out by `seed`. A file that cannot be read is an I/O failure (exit 1),
+/// a bad scene a usage one (exit 2, at its `file:line:col`).
+fn read_scene(path: &Path, seed: u64, frame: Frame) -> Result<Scene, Failure> {
+    if path == Path::new(RANDOM_SCENE) {
+        let text = random::random_scene(seed, None);
+        return scene::parse_str_in(&text, RANDOM_SCENE, Path::new(""), frame)
+            .map_err(|e| Failure::Run(e.to_string()));
+    }
+    scene::parse_file_in(path, frame).map_err(|e| match e {
         scene::FileError::Read(message) => Failure::Run(message),
         scene::FileError::Parse(e) => Failure::Usage(e.to_string()),
-    })?;
+    })
+}
+
+/// The hash of the text of the scene `path` names (as for [`read_scene`]), which goes
+/// into an EXR file's note for `merge` to check.
+fn scene_hash(path: &Path, seed: u64) -> Result<u64, Failure> {
+    if path == Path::new(RANDOM_SCENE) {
+        return Ok(farm::scene_hash(
+            random::random_scene(seed, None).as_bytes(),
+        ));
+    }
+    let bytes = std::fs::read(path)
+        .map_err(|e| Failure::Run(format!("cannot read '{}': {e}", path.display())))?;
+    Ok(farm::scene_hash(&bytes))
+}
+
+/// [`read_scene`], then its warnings on stderr; a scene without a camera is refused.
+fn load_scene(path: &Path, seed: u64, frame: Frame) -> Result<Scene, Failure> {
+    let scene = read_scene(path, seed, frame)?;
     for w in &scene.warnings {
         eprintln!(
             "{}:{}:{}: warning: {}",
@@ -142,29 +211,32 @@ fn load_scene(path: &Path, frame: Frame) -> Result<Scene, Failure> {
     Ok(scene)
 }
 
+/// Refuses an output file that cannot be written (its folder is missing, say) before the
+/// work whose result it would hold: an I/O failure (exit 1), as the write would have been.
+fn check_output(path: &Path) -> Result<(), Failure> {
+    p3trace::output::check_writable(path).map_err(Failure::Run)
+}
+
+/// [`check_output`] for the target of `--json`, if any (`-` is standard output).
+fn check_statistics_target(target: Option<&Path>) -> Result<(), Failure> {
+    target.map_or(Ok(()), |target| {
+        statistics::check_target(target).map_err(Failure::Run)
+    })
+}
+
 fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy();
         PathBuf::from(format!("{stem}.png"))
     });
-    // Refuse a bad output name before spending time on the render.
+    // Refuse a bad output name, or one that cannot be written, before spending time on
+    // the render.
     OutputFormat::from_path(&output).map_err(Failure::Usage)?;
-    let profile = match args.profile {
-        ProfileChoice::Standard => Profile::Standard,
-        ProfileChoice::Course => Profile::Course,
-    };
-    // The hash of the scene's text goes into an EXR file's note, for `merge` to check.
-    let (mut scene, scene_hash) = if args.scene == Path::new("random") {
-        let text = random::random_scene(args.seed, None);
-        let scene = scene::parse_str_in(&text, "random", Path::new(""), profile.frame())
-            .map_err(|e| Failure::Run(e.to_string()))?;
-        (scene, farm::scene_hash(text.as_bytes()))
-    } else {
-        let scene = load_scene(&args.scene, profile.frame())?;
-        let bytes = std::fs::read(&args.scene)
-            .map_err(|e| Failure::Run(format!("cannot read '{}': {e}", args.scene.display())))?;
-        (scene, farm::scene_hash(&bytes))
-    };
+    check_output(&output)?;
+    check_statistics_target(args.json.as_deref())?;
+    let profile = profile(args.profile);
+    let mut scene = load_scene(&args.scene, args.seed, profile.frame())?;
+    let scene_hash = scene_hash(&args.scene, args.seed)?;
     // Spheres tested as the profile says, here rather than on a copy in the renderer.
     scene.geometry.spheres.roots = profile.sphere_roots();
     if let Some(aperture) = args.aperture {
@@ -263,13 +335,14 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
             String::new()
         };
         say(&format!(
-            "{}: {}x{}{part}, {}, {:.3} s, {} rays, {:.2} Mrays/s -> {}",
+            "{}: {}x{}{part}, {}, {:.3} s, {} {}, {:.2} Mrays/s -> {}",
             scene.name,
             options.width,
             options.height,
             samples_label(options.sampling),
             seconds,
             grouped(rays),
+            noun(rays as f64, "ray", "rays"),
             rays as f64 / 1e6 / seconds.max(1e-9),
             output.display()
         ));
@@ -279,6 +352,13 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
         statistics::write(target, &value).map_err(Failure::Run)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn profile(choice: ProfileChoice) -> Profile {
+    match choice {
+        ProfileChoice::Standard => Profile::Standard,
+        ProfileChoice::Course => Profile::Course,
+    }
 }
 
 /// The structure the command line asks for (by default the fastest, whatever the file
@@ -307,8 +387,9 @@ fn accel_options(scene: &Scene, args: &AccelArgs) -> AccelOptions {
     }
 }
 
-fn run_info(path: &Path, accel_args: &AccelArgs) -> Result<ExitCode, Failure> {
-    let scene = load_scene(path, Frame::File)?;
+fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
+    // Described in the file's coordinates, as written.
+    let scene = load_scene(&args.scene, args.seed, Frame::File)?;
     let g = &scene.geometry;
     println!("scene: {}", scene.name);
     let total: usize = PrimKind::ALL.iter().map(|&k| g.count(k)).sum();
@@ -318,13 +399,17 @@ fn run_info(path: &Path, accel_args: &AccelArgs) -> Result<ExitCode, Failure> {
     }
     if scene.meshes > 0 {
         println!(
-            "  ({} triangles from {} meshes)",
-            scene.mesh_triangles, scene.meshes
+            "  ({} from {})",
+            count(scene.mesh_triangles as u64, "triangle", "triangles"),
+            count(scene.meshes as u64, "mesh", "meshes")
         );
     }
-    let smooth = g.triangles.vertex_normals.len();
+    let smooth = g.triangles.vertex_normals.len() as u64;
     if smooth > 0 {
-        println!("  ({smooth} triangles have vertex normals)");
+        println!(
+            "  ({} vertex normals)",
+            count(smooth, "triangle has", "triangles have")
+        );
     }
     println!("materials: {}", scene.materials.len());
     let area = scene
@@ -352,8 +437,18 @@ fn run_info(path: &Path, accel_args: &AccelArgs) -> Result<ExitCode, Failure> {
         .map_or("not set".to_string(), |a| format!("{a:?}").to_lowercase());
     println!("accel (file): {accel}");
     println!("spp (file): {}", scene.spp);
-    let options = accel_options(&scene, accel_args);
-    let (structure, build_time) = Accel::build(&scene.geometry, &options);
+    // The structure as `render` builds it: over positions in the profile's frame, moving
+    // spheres bounded over the scene's default shutter.
+    let frame = profile(args.profile).frame();
+    let rendered = (frame != Frame::File)
+        .then(|| read_scene(&args.scene, args.seed, frame))
+        .transpose()?;
+    let rendered = rendered.as_ref().unwrap_or(&scene);
+    let options = AccelOptions {
+        shutter: RenderOptions::from_scene(rendered).shutter,
+        ..accel_options(rendered, &args.accel)
+    };
+    let (structure, build_time) = Accel::build(&rendered.geometry, &options);
     println!(
         "structure: {}, built in {:.3} s",
         structure.name(),
@@ -366,9 +461,11 @@ fn run_info(path: &Path, accel_args: &AccelArgs) -> Result<ExitCode, Failure> {
 }
 
 fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
-    // Refuse a bad name for the heat map before reading the images.
+    // Refuse a bad name for the heat map, or one that cannot be written, before reading
+    // the images.
     if let Some(path) = &args.diff {
         OutputFormat::from_path(path).map_err(Failure::Usage)?;
+        check_output(path)?;
     }
     let a = p3trace::compare::load(&args.first).map_err(Failure::Usage)?;
     let b = p3trace::compare::load(&args.second).map_err(Failure::Usage)?;
@@ -377,11 +474,12 @@ fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
     println!("size: {}x{}", c.width, c.height);
     println!("psnr: {:.2} dB", c.psnr);
     println!("ssim: {:.4}", c.ssim);
-    println!("max channel difference: {} levels", c.max_difference);
-    println!("pixels within {} levels: {share:.3}%", args.tolerance);
+    println!("max channel difference: {}", levels(c.max_difference));
+    println!("pixels within {}: {share:.3}%", levels(args.tolerance));
     if let Some(path) = &args.diff {
-        c.heat_map().write(path).map_err(Failure::Run)?;
-        println!("diff: {} ({})", path.display(), c.heat_map_scale());
+        let full = args.diff_scale;
+        c.heat_map(full).write(path).map_err(Failure::Run)?;
+        println!("diff: {} ({})", path.display(), c.heat_map_scale(full));
     }
     if share + 1e-9 < args.min_match {
         println!(
@@ -395,9 +493,10 @@ fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
 }
 
 fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
-    // Refuse a bad output name before reading the parts.
+    // Refuse a bad output name, or one that cannot be written, before reading the parts.
     if let Some(path) = &args.output {
         OutputFormat::from_path(path).map_err(Failure::Usage)?;
+        check_output(path)?;
     }
     // One part in memory at a time besides the canvas.
     let mut canvas: Option<Canvas> = None;
@@ -429,9 +528,9 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
             )),
         };
     };
-    let count = args.tiles.or_else(|| canvas.tile_count());
+    let tile_count = args.tiles.or_else(|| canvas.tile_count());
     if args.missing {
-        let n = count.ok_or_else(|| {
+        let n = tile_count.ok_or_else(|| {
             Failure::Usage(
                 "the parts are not all tiles of one count: give --tiles N to name the \
                  missing tiles"
@@ -444,10 +543,14 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
     }
     if let Some((pixels, gap)) = canvas.gaps() {
         let mut message = format!(
-            "the parts leave {pixels} pixels uncovered, within columns {}..{} and rows {}..{}",
-            gap.x0, gap.x1, gap.y0, gap.y1
+            "the parts leave {} uncovered, within columns {}..{} and rows {}..{}",
+            count(pixels, "pixel", "pixels"),
+            gap.x0,
+            gap.x1,
+            gap.y0,
+            gap.y1
         );
-        if let Some(n) = count {
+        if let Some(n) = tile_count {
             let missing = canvas.missing_tiles(n).map_err(Failure::Usage)?;
             let names: Vec<String> = missing.iter().map(|t| t.to_string()).collect();
             message.push_str(&format!(
@@ -470,8 +573,9 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
 
 fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     use p3trace::bench;
+    check_statistics_target(args.json.as_deref())?;
     // The protocol's rays are made in the file's coordinates, as the Embree harness's.
-    let scene = load_scene(&args.scene, Frame::File)?;
+    let scene = load_scene(&args.scene, args.seed, Frame::File)?;
     let options = accel_options(&scene, &args.accel);
     let (accel, build_time) = Accel::build(&scene.geometry, &options);
     let (name, stats) = (accel.name(), accel.stats());
@@ -483,11 +587,16 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     let say = human_output(args.json.as_deref());
     say("# p3trace bench: trace-throughput protocol (PROTOCOL.md)");
     say(&format!("# scene {}", scene.name));
+    let geometry = &scene.geometry;
     say(&format!(
-        "# geometry {} bounded objects, {} planes, {} lights",
-        scene.geometry.bounded_count(),
-        scene.geometry.count(PrimKind::Plane),
-        scene.lights.len()
+        "# geometry {}, {}, {}",
+        count(
+            geometry.bounded_count() as u64,
+            "bounded object",
+            "bounded objects"
+        ),
+        count(geometry.count(PrimKind::Plane) as u64, "plane", "planes"),
+        count(scene.lights.len() as u64, "light", "lights")
     ));
     say(&format!(
         "# resolution {width}x{height} (scene {}x{})",
@@ -498,9 +607,10 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
         build_time.as_secs_f64()
     ));
     say(&format!(
-        "# cpu {}, {cores} logical CPUs; best of {} passes",
+        "# cpu {}, {}; best of {}",
         p3trace::machine::cpu_model(),
-        args.reps
+        count(cores as u64, "logical CPU", "logical CPUs"),
+        count(args.reps.into(), "pass", "passes")
     ));
     say("# ray-set  api  threads  rays  hits  tsum  mrays_per_s");
     let mut thread_counts = vec![1];
@@ -528,22 +638,23 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The project's skybox folders, beside the scenes in `scenes/`.
-const SKY_Z_UP: &str = "sky_zup";
-const SKY_Y_UP: &str = "sky_yup";
+/// The project's skybox folders, beside the scenes in `scenes/`, from the project's
+/// folder (as the dragon's models in `data/` are).
+const SKY_Z_UP: &str = "scenes/sky_zup";
+const SKY_Y_UP: &str = "scenes/sky_yup";
 
 fn run_gen(command: GenCommand) -> Result<ExitCode, Failure> {
     let (text, out) = match command {
         GenCommand::Balls { depth, out } => {
-            let env = out.env_or(Some(SKY_Z_UP));
+            let env = out.prepare(Some(SKY_Z_UP))?;
             (sphereflake::balls_scene(depth, env.as_deref()), out)
         }
         GenCommand::Mount { level, seed, out } => {
-            let env = out.env_or(Some(SKY_Z_UP));
+            let env = out.prepare(Some(SKY_Z_UP))?;
             (mountain::mount_scene(level, seed, env.as_deref()), out)
         }
         GenCommand::Random { seed, out } => {
-            let env = out.env_or(None);
+            let env = out.prepare(None)?;
             (random::random_scene(seed, env.as_deref()), out)
         }
         GenCommand::Dragon {
@@ -551,6 +662,7 @@ fn run_gen(command: GenCommand) -> Result<ExitCode, Failure> {
             ply,
             out,
         } => {
+            let env = out.prepare(Some(SKY_Y_UP))?;
             let path = ply
                 .unwrap_or_else(|| Path::new("data/stanford-dragon").join(resolution.file_name()));
             if !path.is_file() {
@@ -563,7 +675,6 @@ fn run_gen(command: GenCommand) -> Result<ExitCode, Failure> {
             if mesh.triangles.is_empty() {
                 return Err(Failure::Usage(format!("{}: no triangles", path.display())));
             }
-            let env = out.env_or(Some(SKY_Y_UP));
             let source = path.display().to_string();
             (dragon::dragon_scene(&mesh, &source, env.as_deref()), out)
         }
@@ -596,12 +707,65 @@ fn write_to_stdout(bytes: &[u8], what: &str) -> Result<ExitCode, Failure> {
 }
 
 impl SceneOutput {
-    /// The `env` folder: the one asked for, none with --no-env, else the scene's default.
-    fn env_or(&self, default: Option<&str>) -> Option<String> {
-        if self.no_env {
-            None
-        } else {
-            self.env.clone().or(default.map(str::to_string))
+    /// Before the scene is made: refuses an output file that cannot be written, and
+    /// returns the folder for the `env` line: the one asked for, none with --no-env, else
+    /// the scene's default, named from where the scene is written ([`path_from`]).
+    fn prepare(&self, default: Option<&str>) -> Result<Option<String>, Failure> {
+        if let Some(file) = &self.output {
+            check_output(file)?;
         }
+        let Some(sky) = self.env.as_deref().or(default).filter(|_| !self.no_env) else {
+            return Ok(None);
+        };
+        let sky = PathBuf::from(sky);
+        if !sky.is_dir() {
+            eprintln!(
+                "p3trace: warning: no skybox folder at {}: the scene will show its \
+                 background colour (--env DIR names the folder, from the current one)",
+                sky.display()
+            );
+        }
+        let named = match &self.output {
+            Some(file) => path_from(file, &sky)?,
+            None => sky,
+        };
+        Ok(Some(named.display().to_string()))
     }
+}
+
+/// `target`, a path from the current folder, as a path from the folder of `file`: relative
+/// where the two share more than the root (the project's own files keep their names in
+/// `scenes/`), else absolute; an absolute `target` stays as it is.
+fn path_from(file: &Path, target: &Path) -> Result<PathBuf, Failure> {
+    if target.is_absolute() {
+        return Ok(target.to_path_buf());
+    }
+    let folder = p3trace::output::folder_of(file);
+    let cannot = |path: &Path, e: std::io::Error| {
+        Failure::Run(format!("cannot find {}: {e}", path.display()))
+    };
+    let folder = folder.canonicalize().map_err(|e| cannot(folder, e))?;
+    // A folder that does not exist (yet) is named as it is written.
+    let target = match target.canonicalize() {
+        Ok(target) => target,
+        Err(_) => std::env::current_dir()
+            .map_err(|e| cannot(Path::new("."), e))?
+            .join(target),
+    };
+    let shared = (folder.components().zip(target.components()))
+        .take_while(|(a, b)| a == b)
+        .count();
+    if shared <= 1 {
+        return Ok(target);
+    }
+    let up = folder
+        .components()
+        .skip(shared)
+        .map(|_| Component::ParentDir);
+    let relative: PathBuf = up.chain(target.components().skip(shared)).collect();
+    Ok(if relative.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        relative
+    })
 }

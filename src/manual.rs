@@ -22,7 +22,11 @@ pub fn man_page(command: Command) -> String {
     let mut command = without_help_commands(command);
     // Gives every command its full name ("p3trace gen balls") for its synopsis.
     command.build();
-    let top = Man::new(command.clone());
+    // The title line names the version's first line only: the `.TH` macro ends at the
+    // line's end, so that a long version's other lines would stand atop the page.
+    let version = command.get_version().and_then(|v| v.lines().next());
+    let source = format!("{} {}", command.get_name(), version.unwrap_or_default());
+    let top = Man::new(command.clone()).source(source.trim_end());
     let mut page = rendered(|out| {
         top.render_title(out)?;
         top.render_name_section(out)?;
@@ -138,6 +142,17 @@ mod tests {
         );
         assert!(page.contains(r"\fB\-\-fast\fR"));
         assert!(page.contains(r"\&.SH not a heading"), "text stays text");
+    }
+
+    #[test]
+    fn the_title_is_one_line_with_the_version_s_first() {
+        let page = man_page(tool().version("1.0 (commit abc)\ninstruction set: all"));
+        let lines: Vec<_> = page.lines().skip(2).take(2).collect();
+        assert_eq!(
+            lines,
+            [r#".TH tool 1  "tool 1.0 (commit abc)" "#, ".SH NAME"]
+        );
+        assert!(!page.contains("instruction set"), "{page}");
     }
 
     #[test]

@@ -114,6 +114,15 @@ pub fn bench(run: &BenchRun) -> Value {
 
 /// Writes `value` to `target`, a file (replaced only once complete) or standard output
 /// for `-`, with a final newline.
+/// Checks, before the run, that [`write()`] can write to `target`.
+pub fn check_target(target: &Path) -> Result<(), String> {
+    if target == Path::new("-") {
+        Ok(())
+    } else {
+        p3trace::output::check_writable(target)
+    }
+}
+
 pub fn write(target: &Path, value: &Value) -> Result<(), String> {
     let write_to = |out: &mut dyn Write| {
         serde_json::to_writer_pretty(&mut *out, value)?;

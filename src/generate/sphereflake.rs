@@ -8,6 +8,7 @@
 use glam::{DMat3, DVec3};
 
 use super::{Camera, Finish, Header, P3fWriter};
+use crate::plural::count;
 
 /// Sphereflake depths give `(9^(depth + 1) - 1) / 8` spheres; beyond this the count
 /// would pass 50 million.
@@ -96,9 +97,9 @@ pub fn balls_scene(depth: u32, env: Option<&str>) -> String {
     let balls = sphereflake(depth);
     let mut w = P3fWriter::new(&Header {
         comment: &format!(
-            "Sphereflake of depth {depth} ({} spheres) after Eric Haines' SPD 'balls',\n\
+            "Sphereflake of depth {depth} ({}) after Eric Haines' SPD 'balls',\n\
              made by: p3trace gen balls --depth {depth}",
-            balls.len()
+            count(balls.len() as u64, "sphere", "spheres")
         ),
         background: DVec3::new(0.078, 0.361, 0.753),
         env,

@@ -5,10 +5,12 @@
 //! display window, the data window's corner and one `p3trace` note attribute (one,
 //! because the `exr` crate writes its attributes in hash-map order).
 
-use std::io::Write;
+use std::io::{Cursor, Write};
 use std::path::Path;
 
 use glam::Vec3;
+
+use crate::limits::check_image_size;
 
 /// Output formats, chosen by the file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -87,6 +89,30 @@ impl Film {
             height,
             pixels: vec![Vec3::ZERO; width as usize * height as usize],
         }
+    }
+
+    /// Reads the first layer of an OpenEXR file: its R, G and B channels, of any sample
+    /// type, as linear floats; the data window alone, as a region's PNG holds it. The
+    /// header's size is checked ([`check_image_size`]) before any pixel is read.
+    pub fn read_exr(bytes: &[u8]) -> Result<Film, String> {
+        let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false)
+            .map_err(|e| format!("not a readable OpenEXR file ({e})"))?;
+        let size = meta
+            .headers
+            .first()
+            .ok_or("an OpenEXR file without a layer")?
+            .layer_size;
+        let side = |n: usize| u32::try_from(n).ok().filter(|&n| n > 0);
+        let (Some(width), Some(height)) = (side(size.x()), side(size.y())) else {
+            return Err("an empty data window".into());
+        };
+        check_image_size(width, height)?;
+        let pixels = read_exr_pixels(bytes, width, height)?;
+        Ok(Film {
+            width,
+            height,
+            pixels,
+        })
     }
 
     /// Colour of pixel `(x, row)` with row 0 at the top.
@@ -187,6 +213,38 @@ impl Film {
             .to_buffered(out)
             .map_err(std::io::Error::other)
     }
+}
+
+/// The R, G and B pixels of the first layer of the OpenEXR file `bytes` that has them,
+/// top row first, which must fill a `width` x `height` data window.
+pub fn read_exr_pixels(bytes: &[u8], width: u32, height: u32) -> Result<Vec<Vec3>, String> {
+    use exr::prelude::{ReadChannels, ReadLayers, ReadSpecificChannel};
+    let row = width as usize;
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .specific_channels()
+        .required("R")
+        .required("G")
+        .required("B")
+        .collect_pixels(
+            move |size, _| vec![Vec3::ZERO; size.width() * size.height()],
+            move |pixels: &mut Vec<Vec3>, at, (r, g, b): (f32, f32, f32)| {
+                if let Some(p) = pixels.get_mut(at.y() * row + at.x()) {
+                    *p = Vec3::new(r, g, b);
+                }
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .non_parallel()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|e| format!("unreadable pixels ({e})"))?;
+    let pixels = image.layer_data.channel_data.pixels;
+    if pixels.len() as u64 != u64::from(width) * u64::from(height) {
+        return Err("its pixels do not fill its data window".into());
+    }
+    Ok(pixels)
 }
 
 #[cfg(test)]

@@ -7,6 +7,8 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::plural::count;
+
 /// How a render shows its progress.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Progress {
@@ -94,9 +96,9 @@ impl Lines {
             0.0
         };
         format!(
-            "progress: {:.0}% ({done} of {} tiles), {seconds:.1} s elapsed, about {left:.1} s left",
+            "progress: {:.0}% ({done} of {}), {seconds:.1} s elapsed, about {left:.1} s left",
             100.0 * share,
-            self.total
+            count(self.total as u64, "tile", "tiles")
         )
     }
 }

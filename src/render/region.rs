@@ -2,6 +2,8 @@
 //! render farm (pbrt's `--cropwindow` and `--pixelbounds`, and `--tile I/N` for job
 //! arrays). Coordinates are pixels with y from the top, as in pbrt and OpenEXR.
 
+use crate::plural;
+
 /// A rectangle of pixels `[x0, x1) x [y0, y1)`, rows counted from the top of the image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Region {
@@ -92,7 +94,9 @@ impl Region {
         }
         if count > height {
             return Err(format!(
-                "--tile {index}/{count}: the image has {height} rows, so at most {height} tiles"
+                "--tile {index}/{count}: the image has {}, so at most {}",
+                plural::count(height.into(), "row", "rows"),
+                plural::count(height.into(), "tile", "tiles")
             ));
         }
         let row = |i: u32| (u64::from(i) * u64::from(height) / u64::from(count)) as u32;

@@ -22,6 +22,7 @@ use glam::{DVec3, Vec3};
 use super::{AccelKind, CameraSpec, Frame, Light, Material, Scene, Warning};
 use crate::intersect::MIN_RADIUS;
 use crate::limits::{check_image_size, MAX_RESOLUTION, MAX_SPP_SIDE};
+use crate::plural::count;
 
 /// Largest magnitude of a number in a scene. The intersection routines multiply up to four
 /// coordinates together (1e36 at most here, within `f32`); beyond it they overflow, and
@@ -406,8 +407,8 @@ impl<'a> Parser<'a> {
             return Err(self.error_token(
                 token,
                 format!(
-                    "{what} is {n}, which needs {needed} more numbers, but only {} bytes remain in the file",
-                    self.lexer.text.len() - self.lexer.pos
+                    "{what} is {n}, which needs {needed} more numbers, but only {} remain in the file",
+                    count((self.lexer.text.len() - self.lexer.pos) as u64, "byte", "bytes")
                 ),
             ));
         }

@@ -9,6 +9,8 @@
 use std::io::Read;
 use std::path::Path;
 
+use crate::plural::count;
+
 /// A triangle mesh: vertex positions and triangles as indices into them.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
@@ -197,7 +199,8 @@ fn push_fan(polygon: &[f64], vertices: usize, out: &mut Vec<[u32; 3]>) -> Result
             Ok(v as u32)
         } else {
             Err(format!(
-                "vertex index {v} out of range (the file has {vertices} vertices)"
+                "vertex index {v} out of range (the file has {})",
+                count(vertices as u64, "vertex", "vertices")
             ))
         }
     };

@@ -329,7 +329,7 @@ fn an_unknown_output_extension_is_refused_before_the_scene_is_read() {
 }
 
 #[test]
-fn a_target_that_is_a_folder_fails_with_1_and_leaves_no_partial_file() {
+fn a_target_that_is_a_folder_fails_with_1_before_the_render() {
     let dir = scratch("adversarial_folder_target");
     std::fs::create_dir(dir.join("out.png")).unwrap();
     let target = dir.join("out.png");
@@ -337,14 +337,126 @@ fn a_target_that_is_a_folder_fails_with_1_and_leaves_no_partial_file() {
         "render",
         &showcase(),
         "--resolution",
-        "8x8",
+        "64x64",
         "-o",
         target.to_str().unwrap(),
     ]);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
-    assert!(stderr(&out).contains("cannot write"), "{}", stderr(&out));
+    assert_eq!(
+        stderr(&out),
+        format!(
+            "p3trace: error: cannot write {}: it is a folder\n",
+            target.display()
+        ),
+        "refused before the render's progress lines"
+    );
     assert_eq!(files_in(&dir), ["out.png"]);
     assert!(target.is_dir());
+}
+
+/// Every command that writes a file after long work checks first that it can: the
+/// output's folder exists and is a folder, and a file can be made there. The refusal is
+/// an I/O failure (exit 1, as the write's would be), and comes before the inputs are
+/// read: these inputs do not exist, and are not what the message speaks of.
+#[test]
+fn an_output_that_cannot_be_written_is_refused_before_the_work() {
+    let dir = scratch("adversarial_unwritable");
+    let missing = dir.join("nope");
+    let file = dir.join("file");
+    std::fs::write(&file, b"").unwrap();
+    let absent = dir.join("absent.p3f").display().to_string();
+    let part = dir.join("absent.exr").display().to_string();
+    let image = dir.join("absent.png").display().to_string();
+    let ply = dir.join("absent.ply").display().to_string();
+    // OUT stands for the output that cannot be written, `name` in `folder`.
+    for (args, folder, name) in [
+        (&["render", &absent, "-o", "OUT"][..], &missing, "x.png"),
+        (&["render", &absent, "-o", "OUT"], &file, "x.png"),
+        (
+            &["render", &absent, "-o", &image, "--json", "OUT"],
+            &missing,
+            "s.json",
+        ),
+        (&["bench", &absent, "--json", "OUT"], &missing, "s.json"),
+        (&["merge", &part, "-o", "OUT"], &missing, "m.exr"),
+        (
+            &["compare", &image, &image, "--diff", "OUT"],
+            &missing,
+            "d.png",
+        ),
+        (&["gen", "mount", "-o", "OUT"], &missing, "m.p3f"),
+        (
+            &["gen", "dragon", "--ply", &ply, "-o", "OUT"],
+            &file,
+            "d.p3f",
+        ),
+    ] {
+        let target = folder.join(name).display().to_string();
+        let args: Vec<&str> = args
+            .iter()
+            .map(|&a| if a == "OUT" { target.as_str() } else { a })
+            .collect();
+        let why = if folder == &missing {
+            format!("the folder {} does not exist", folder.display())
+        } else {
+            format!("{} is not a folder", folder.display())
+        };
+        let out = p3trace(&args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {}", stderr(&out));
+        assert_eq!(
+            stderr(&out),
+            format!("p3trace: error: cannot write {target}: {why}\n"),
+            "{args:?}"
+        );
+        assert_eq!(stdout(&out), "", "{args:?}");
+    }
+    assert_eq!(files_in(&dir), ["file"], "nothing written, no probe left");
+
+    // A render that would take a while is refused at once, its progress never shown.
+    let run = p3trace(&[
+        "render",
+        &showcase(),
+        "--resolution",
+        "512x512",
+        "--spp",
+        "16",
+        "-o",
+        missing.join("x.png").to_str().unwrap(),
+    ]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(!stderr(&run).contains("progress"), "{}", stderr(&run));
+}
+
+/// A folder the user may not write into is refused before the render too (root may write
+/// anywhere: then this test skips).
+#[test]
+fn a_folder_without_write_permission_is_refused_before_the_render() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = scratch("adversarial_read_only");
+    let locked = dir.join("locked");
+    std::fs::create_dir(&locked).unwrap();
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+    if std::fs::write(locked.join("probe"), b"").is_ok() {
+        std::fs::remove_file(locked.join("probe")).unwrap();
+        common::skip("this user may write into a read-only folder (root)");
+        return;
+    }
+    let target = locked.join("x.png");
+    let out = p3trace(&[
+        "render",
+        dir.join("absent.p3f").to_str().unwrap(),
+        "-o",
+        target.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let prefix = format!("p3trace: error: cannot write {}: ", target.display());
+    assert!(stderr(&out).starts_with(&prefix), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("ermission denied"),
+        "{}",
+        stderr(&out)
+    );
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o755)).unwrap();
 }
 
 /// A full disk, as the file size limit makes one: writes fail with "file too large"
@@ -376,16 +488,41 @@ fn a_full_disk_keeps_the_old_image_and_leaves_no_partial_file() {
     assert_eq!(std::fs::read(&target).unwrap(), b"the previous image");
 }
 
+/// The signals that end a run cleanly, as `kill` names them, and the exit status each
+/// gives: 128 + its number, as a shell reports a process the signal ended.
+const SIGNALS: [(&str, i32); 3] = [("INT", 130), ("TERM", 143), ("HUP", 129)];
+
 #[test]
-fn ctrl_c_and_termination_exit_130_and_leave_no_image() {
-    for signal in ["-INT", "-TERM", "-HUP"] {
-        interrupted_render_leaves_no_image(signal);
+fn ctrl_c_and_termination_exit_128_plus_the_signal_and_leave_no_image() {
+    for (signal, status) in SIGNALS {
+        interrupted_render_leaves_no_image(signal, status);
     }
 }
 
-/// Sends `signal` (a `kill` option) to a long render.
-fn interrupted_render_leaves_no_image(signal: &str) {
-    let dir = scratch(&format!("adversarial_signal{signal}"));
+/// Waits for `child` to end after `signal`, and returns what it said.
+fn stopped(mut child: std::process::Child, signal: &str) -> std::process::Output {
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(30) {
+            child.kill().unwrap();
+            panic!("p3trace did not stop within 30 s of SIG{signal}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+fn send(signal: &str, child: &std::process::Child) {
+    let kill = Command::new("kill")
+        .args([format!("-{signal}"), child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+}
+
+/// Sends `signal` (as `kill` names it) to a long render, which must exit with `status`.
+fn interrupted_render_leaves_no_image(signal: &str, status: i32) {
+    let dir = scratch(&format!("adversarial_signal_{signal}"));
     let target = dir.join("out.png");
     // Minutes of work on one thread: still rendering when the interrupt comes.
     let mut child = Command::new(env!("CARGO_BIN_EXE_p3trace"))
@@ -410,22 +547,58 @@ fn interrupted_render_leaves_no_image(signal: &str) {
         child.try_wait().unwrap().is_none(),
         "the render ended before the interrupt"
     );
-    let kill = Command::new("kill")
-        .args([signal, &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(30) {
-            child.kill().unwrap();
-            panic!("p3trace did not stop within 30 s of {signal}");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let out = child.wait_with_output().unwrap();
+    send(signal, &child);
+    let out = stopped(child, signal);
     let message = stderr(&out);
-    assert_eq!(out.status.code(), Some(130), "{signal}: {message}");
-    assert!(message.contains("p3trace: interrupted"), "{message}");
+    assert_eq!(out.status.code(), Some(status), "SIG{signal}: {message}");
+    assert!(
+        message.contains(&format!("p3trace: interrupted (SIG{signal})")),
+        "{message}"
+    );
     assert!(files_in(&dir).is_empty(), "{:?}", files_in(&dir));
+}
+
+/// A signal that comes while the output is being written removes the partial file. The
+/// partial file is made a FIFO that nobody reads, so that the writer blocks in the
+/// middle of the scene (far longer than a pipe's buffer) until the signal comes.
+#[test]
+fn a_signal_during_the_write_removes_the_partial_file() {
+    use std::os::unix::fs::OpenOptionsExt;
+    for (signal, status) in SIGNALS {
+        let dir = scratch(&format!("adversarial_signal_write_{signal}"));
+        let target = dir.join("mount.p3f");
+        // The shell makes the FIFO under the name the process it becomes (same PID)
+        // will write through.
+        let child = Command::new("sh")
+            .args([
+                "-c",
+                "mkfifo \"$(dirname \"$1\")/.$(basename \"$1\").$$.partial\" && exec \"$0\" gen mount \
+                 --level 7 -o \"$1\"",
+                env!("CARGO_BIN_EXE_p3trace"),
+                target.to_str().unwrap(),
+            ])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let fifo = dir.join(format!(".mount.p3f.{}.partial", child.id()));
+        let start = Instant::now();
+        while !fifo.exists() {
+            assert!(start.elapsed() < Duration::from_secs(10), "no FIFO made");
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        // A reader that never reads: opening the FIFO for writing succeeds, and the
+        // writes block once its buffer is full.
+        let _reader = std::fs::OpenOptions::new()
+            .read(true)
+            .custom_flags(libc::O_NONBLOCK)
+            .open(&fifo)
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(500));
+        send(signal, &child);
+        let out = stopped(child, signal);
+        let message = stderr(&out);
+        assert_eq!(out.status.code(), Some(status), "SIG{signal}: {message}");
+        assert!(files_in(&dir).is_empty(), "{:?}", files_in(&dir));
+    }
 }

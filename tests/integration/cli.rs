@@ -2,7 +2,7 @@
 
 use crate::common;
 
-use crate::common::{p3trace, scratch, stderr, stdout};
+use crate::common::{p3trace, scratch, stderr, stdout, succeeds};
 
 fn showcase() -> String {
     common::project_file("scenes/showcase.p3f")
@@ -170,7 +170,7 @@ fn info_lists_objects_lights_and_camera() {
         shared.join("scenes/dragon.p3f").to_str().unwrap(),
     ]));
     assert!(
-        dragon.contains("(100000 triangles from 1 meshes)"),
+        dragon.contains("(100000 triangles from 1 mesh)"),
         "{dragon}"
     );
 }
@@ -236,18 +236,30 @@ fn compare_reports_and_exits_by_tolerance() {
 
 #[test]
 fn gen_writes_the_scenes_of_scenes_and_refuses_what_it_cannot_make() {
-    // Standard output and -o give the same text, and it is the file in scenes/.
+    // Standard output and -o give the text of the file in scenes/, but for the skybox's
+    // path: from the current folder (the project's, where the tests run) on standard
+    // output, from the file's folder with -o.
     let out = p3trace(&["gen", "balls", "--depth", "2"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let committed =
         std::fs::read_to_string(common::project_file("scenes/balls_medium.p3f")).unwrap();
-    assert_eq!(stdout(&out), committed);
+    assert_eq!(
+        stdout(&out),
+        committed.replace("\nenv sky_zup\n", "\nenv scenes/sky_zup\n")
+    );
     let dir = scratch("cli_gen");
     let file = dir.join("mount.p3f");
     let run = p3trace(&["gen", "mount", "--level", "1", "-o", file.to_str().unwrap()]);
     assert!(run.status.success(), "{}", stderr(&run));
     let committed = std::fs::read_to_string(common::project_file("scenes/mount_low.p3f")).unwrap();
-    assert_eq!(std::fs::read_to_string(&file).unwrap(), committed);
+    let without_env = |text: &str| -> Vec<String> {
+        let lines = text.lines().filter(|l| !l.starts_with("env "));
+        lines.map(str::to_string).collect()
+    };
+    assert_eq!(
+        without_env(&std::fs::read_to_string(&file).unwrap()),
+        without_env(&committed)
+    );
     let with_env = stdout(&p3trace(&["gen", "random", "--seed", "2", "--env", "sky"]));
     assert!(with_env.contains("\nenv sky\n"), "{with_env}");
     let no_env = stdout(&p3trace(&["gen", "balls", "--depth", "0", "--no-env"]));
@@ -305,7 +317,7 @@ fn gen_dragon_reads_the_stanford_model_when_fetched() {
     ]);
     assert!(run.status.success(), "{}", stderr(&run));
     let info = stdout(&p3trace(&["info", scene.to_str().unwrap()]));
-    assert!(info.contains("(11102 triangles from 1 meshes)"), "{info}");
+    assert!(info.contains("(11102 triangles from 1 mesh)"), "{info}");
 }
 
 #[test]
@@ -813,6 +825,22 @@ fn man_page_documents_every_command() {
         page.contains(r"\fB\-\-accel\fR"),
         "no --accel in the man page"
     );
+    // The title is one line: the version's first, not the instruction set below it.
+    let title_and_next: Vec<&str> = page
+        .lines()
+        .skip_while(|line| !line.starts_with(".TH"))
+        .take(2)
+        .collect();
+    let expected = format!(
+        r#".TH p3trace 1  "p3trace {} (commit "#,
+        env!("CARGO_PKG_VERSION")
+    );
+    assert!(
+        title_and_next[0].starts_with(&expected),
+        "{title_and_next:?}"
+    );
+    assert!(title_and_next[0].ends_with(r#")" "#), "{title_and_next:?}");
+    assert_eq!(title_and_next[1], ".SH NAME", "{title_and_next:?}");
 }
 
 #[test]
@@ -914,4 +942,497 @@ fn the_course_profile_takes_its_depth_unless_told_otherwise() {
     assert_eq!(shallow, ("\"course\"".to_string(), 3));
     // The showcase's mirror and glass see the sky through rays of depth 3 and more.
     assert_ne!(standard_image, course_image);
+}
+
+/// Every count printed with its noun takes the singular for one: info, the closing line
+/// and progress of a render, the structure's statistics, bench, merge and compare.
+#[test]
+fn counts_of_one_take_the_singular() {
+    let dir = scratch("cli_singular");
+    let scene = dir.join("one.p3f");
+    std::fs::write(
+        &scene,
+        "v from 0 0 5 at 0 0 0 up 0 1 0 angle 45 resolution 2 1\nl 0 5 5\n\
+         pl 0 -1 0 1 -1 0 0 -1 1\nmesh 3 1 -1 0 0 1 0 0 0 1 0 1 2 3\n\
+         pp 3 -1 0 1 0 0 1 1 0 1 0 0 1 0 1 1 0 0 1\n",
+    )
+    .unwrap();
+    let scene = scene.to_str().unwrap();
+    let info = stdout(&p3trace(&["info", scene]));
+    for expected in [
+        "(1 triangle from 1 mesh)",
+        "(1 triangle has vertex normals)",
+    ] {
+        assert!(info.contains(expected), "'{expected}' not in {info}");
+    }
+    let bench = p3trace(&["bench", scene, "--reps", "1", "--threads", "1"]);
+    let bench = stdout(&bench);
+    assert!(bench.contains(", 1 plane, 1 light\n"), "{bench}");
+    assert!(bench.contains("; best of 1 pass\n"), "{bench}");
+
+    // One pixel, no object in sight: one ray, one tile, one primitive in one leaf.
+    let empty = dir.join("empty.p3f");
+    std::fs::write(
+        &empty,
+        "v from 0 0 5 at 0 0 0 up 0 1 0 angle 45 resolution 1 1\ns 10 10 -10 1\n",
+    )
+    .unwrap();
+    let image = dir.join("empty.exr");
+    let run = succeeds(&[
+        "render",
+        empty.to_str().unwrap(),
+        "--stats",
+        "--bvh-width",
+        "2",
+        "-o",
+        image.to_str().unwrap(),
+    ]);
+    let printed = stdout(&run);
+    for expected in ["(0 interior, 1 leaf)", "(1 primitive)", ", 1 ray, "] {
+        assert!(printed.contains(expected), "'{expected}' not in {printed}");
+    }
+    assert!(
+        stderr(&run).contains("progress: 100% (1 of 1 tile), "),
+        "{}",
+        stderr(&run)
+    );
+
+    // A part of one pixel of a 2x1 image leaves one pixel uncovered.
+    let part = dir.join("part.exr");
+    succeeds(&[
+        "render",
+        scene,
+        "--pixel-bounds",
+        "0,1,0,1",
+        "-o",
+        part.to_str().unwrap(),
+    ]);
+    let merged = dir.join("merged.png");
+    let run = p3trace(&[
+        "merge",
+        part.to_str().unwrap(),
+        "-o",
+        merged.to_str().unwrap(),
+    ]);
+    assert!(
+        stderr(&run).contains("the parts leave 1 pixel uncovered"),
+        "{}",
+        stderr(&run)
+    );
+
+    // Images one level apart.
+    let (a, b) = (dir.join("a.png"), dir.join("b.png"));
+    image::RgbImage::from_pixel(2, 2, image::Rgb([10, 10, 10]))
+        .save(&a)
+        .unwrap();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([11, 10, 10]))
+        .save(&b)
+        .unwrap();
+    let run = p3trace(&[
+        "compare",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--tolerance",
+        "1",
+    ]);
+    let printed = stdout(&run);
+    assert!(
+        printed.contains("max channel difference: 1 level\n"),
+        "{printed}"
+    );
+    assert!(
+        printed.contains("pixels within 1 level: 100.000%"),
+        "{printed}"
+    );
+}
+
+/// `random` is a scene wherever a scene is taken, laid out by --seed as `gen random`
+/// lays it out.
+#[test]
+fn random_is_a_scene_wherever_a_scene_is_taken() {
+    let dir = scratch("cli_random_everywhere");
+    let file = dir.join("random3.p3f");
+    succeeds(&["gen", "random", "--seed", "3", "-o", file.to_str().unwrap()]);
+    let file = file.to_str().unwrap();
+    // All but the scene's name and the build time.
+    let described = |args: &[&str]| {
+        let run = succeeds(args);
+        stdout(&run)
+            .lines()
+            .filter(|l| !l.starts_with("scene: ") && !l.starts_with("structure: "))
+            .map(str::to_string)
+            .collect::<Vec<_>>()
+    };
+    let builtin = described(&["info", "random", "--seed", "3"]);
+    assert_eq!(builtin, described(&["info", file]));
+    assert_ne!(builtin, described(&["info", "random", "--seed", "4"]));
+    let info = stdout(&p3trace(&["info", "random", "--seed", "3"]));
+    assert!(info.starts_with("scene: random\n"), "{info}");
+
+    let bench = |scene: &str| {
+        let args = [
+            "bench",
+            scene,
+            "--seed",
+            "3",
+            "--reps",
+            "1",
+            "--threads",
+            "1",
+        ];
+        let run = succeeds(&args);
+        let text = stdout(&run);
+        let geometry = text
+            .lines()
+            .find(|l| l.starts_with("# geometry"))
+            .map(str::to_string);
+        (text, geometry.unwrap())
+    };
+    let (text, geometry) = bench("random");
+    assert!(text.contains("# scene random\n"), "{text}");
+    assert_eq!(geometry, bench(file).1);
+}
+
+/// `info` builds the structure as `render` does: the same statistics, line for line, for
+/// the same scene, profile and structure. The standard profile stores positions relative
+/// to the camera, which moves the SAH build's bins (the level-6 mountain), and moving
+/// spheres are bounded over the shutter (scenes/motion.p3f).
+#[test]
+fn info_and_render_stats_describe_the_same_structure() {
+    let dir = scratch("cli_same_structure");
+    let mount = dir.join("mount6.p3f");
+    succeeds(&[
+        "gen",
+        "mount",
+        "--level",
+        "6",
+        "--no-env",
+        "-o",
+        mount.to_str().unwrap(),
+    ]);
+    let motion = common::project_file("scenes/motion.p3f");
+    let image = dir.join("out.png");
+    let statistics = |text: &str| -> Vec<String> {
+        let lines: Vec<String> = text
+            .lines()
+            .filter(|l| l.starts_with("  "))
+            .map(str::to_string)
+            .collect();
+        assert!(lines.len() >= 4, "{text}");
+        lines
+    };
+    for scene in [mount.to_str().unwrap(), motion.to_str().unwrap()] {
+        for flags in [
+            &[][..],
+            &["--profile", "course"],
+            &["--accel", "grid"],
+            &["--bvh", "midpoint"],
+        ] {
+            let mut info = vec!["info", scene];
+            info.extend_from_slice(flags);
+            let info = stdout(&p3trace(&info));
+            let info = info.split_once("\nstructure: ").unwrap().1;
+            let mut render = vec!["render", scene, "--stats", "--quiet", "--resolution", "4x4"];
+            render.extend_from_slice(&["-o", image.to_str().unwrap()]);
+            render.extend_from_slice(flags);
+            let run = succeeds(&render);
+            assert_eq!(
+                statistics(info),
+                statistics(&stdout(&run)),
+                "{scene} {flags:?}"
+            );
+        }
+    }
+}
+
+/// A negative number for a numeric flag gets a message that says what the flag takes
+/// (exit 2), not clap's tip to write `-- -1`; flags whose values may be negative take them.
+#[test]
+fn negative_numbers_get_a_plain_message() {
+    let dir = scratch("cli_negative");
+    let scene = showcase();
+    let image = dir.join("x.png").display().to_string();
+    let other = common::project_file("docs/gallery/random.png")
+        .display()
+        .to_string();
+    let render = |flag: &'static str, value: &'static str| -> Vec<String> {
+        let mut args = vec!["render", &scene, "-o", &image, flag, value];
+        if flag == "--light-size" {
+            args.push("--soft-shadows");
+        }
+        args.into_iter().map(str::to_string).collect()
+    };
+    let mut cases: Vec<(Vec<String>, &str)> = [
+        ("--spp", "-1"),
+        ("--max-depth", "-1"),
+        ("--threads", "-1"),
+        ("--seed", "-1"),
+        ("--aperture", "-1"),
+        ("--focal", "-1"),
+        ("--light-size", "-1"),
+        ("--light-samples", "-1"),
+        ("--roughness", "-1"),
+        ("--shutter", "-1,-2"),
+        ("--resolution", "-8x8"),
+        ("--crop", "-0.5,1,0,1"),
+        ("--pixel-bounds", "-1,4,0,4"),
+        ("--tile", "-1/4"),
+        ("--bvh-width", "-2"),
+        ("--grid-density", "-1"),
+    ]
+    .into_iter()
+    .map(|(flag, value)| (render(flag, value), flag))
+    .collect();
+    let owned = |args: &[&str]| args.iter().map(|a| a.to_string()).collect::<Vec<_>>();
+    for (args, flag) in [
+        (&["info", &scene, "--seed", "-1"][..], "--seed"),
+        (&["bench", &scene, "--threads", "-1"], "--threads"),
+        (&["bench", &scene, "--reps", "-1"], "--reps"),
+        (&["bench", &scene, "--seed", "-1"], "--seed"),
+        (
+            &["merge", "part.exr", "-o", "m.exr", "--tiles", "-1"],
+            "--tiles",
+        ),
+        (
+            &["compare", &other, &other, "--tolerance", "-1"],
+            "--tolerance",
+        ),
+        (
+            &["compare", &other, &other, "--min-match", "-1"],
+            "--min-match",
+        ),
+        (
+            &[
+                "compare",
+                &other,
+                &other,
+                "--diff",
+                &image,
+                "--diff-scale",
+                "-1",
+            ],
+            "--diff-scale",
+        ),
+        (&["gen", "balls", "--depth", "-1"], "--depth"),
+        (&["gen", "mount", "--level", "-1"], "--level"),
+        (&["gen", "mount", "--seed", "-1"], "--seed"),
+        (&["gen", "random", "--seed", "-1"], "--seed"),
+        (&["gen", "skybox", "--size", "-1", "-o", &image], "--size"),
+    ] {
+        cases.push((owned(args), flag));
+    }
+    for (args, flag) in cases {
+        let run = p3trace(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        let message = stderr(&run);
+        assert_eq!(run.status.code(), Some(2), "{args:?}: {message}");
+        assert!(
+            message.starts_with("error: invalid value '-"),
+            "{args:?}: {message}"
+        );
+        assert!(
+            message.contains(&format!("for '{flag} ")),
+            "{args:?}: {message}"
+        );
+        assert!(!message.contains("tip:"), "{args:?}: {message}");
+    }
+    let message = stderr(&p3trace(
+        &render("--spp", "-1")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    ));
+    assert!(
+        message.contains("'-1' is not a whole number from 1 to "),
+        "{message}"
+    );
+    // Shutter times may be negative.
+    succeeds(&[
+        "render",
+        &scene,
+        "--resolution",
+        "8x6",
+        "--shutter",
+        "-0.5,0",
+        "-o",
+        &image,
+    ]);
+}
+
+/// `compare` reads OpenEXR files as the bytes a PNG of the same render holds: an EXR and
+/// a PNG of one render are equal, a region's EXR is its data window, and the heat map may
+/// be written as EXR and read back.
+#[test]
+fn compare_reads_exr_as_the_png_of_the_same_render() {
+    let dir = scratch("cli_compare_exr");
+    let render = |name: &str, extra: &[&str]| {
+        let path = dir.join(name).display().to_string();
+        let scene = showcase();
+        let mut args = vec!["render", &scene, "--resolution", "32x24", "-o", &path];
+        args.extend_from_slice(extra);
+        succeeds(&args);
+        path
+    };
+    let (exr, png) = (render("a.exr", &[]), render("a.png", &[]));
+    let same = succeeds(&["compare", &exr, &png]);
+    let printed = stdout(&same);
+    assert!(printed.contains("size: 32x24\n"), "{printed}");
+    assert!(printed.contains("psnr: inf dB"), "{printed}");
+    assert!(
+        printed.contains("pixels within 0 levels: 100.000%"),
+        "{printed}"
+    );
+
+    let bounds = ["--pixel-bounds", "8,24,4,16"];
+    let (part_exr, part_png) = (render("p.exr", &bounds), render("p.png", &bounds));
+    let part = succeeds(&["compare", &part_exr, &part_png]);
+    assert!(stdout(&part).contains("size: 16x12\n"), "{}", stdout(&part));
+
+    let other = render("b.exr", &["--spp", "4"]);
+    let heat = dir.join("d.exr").display().to_string();
+    let differ = p3trace(&["compare", &exr, &other, "--diff", &heat]);
+    assert_eq!(differ.status.code(), Some(1), "{}", stderr(&differ));
+    assert!(!stdout(&differ).contains("max channel difference: 0 levels"));
+    let read_back = succeeds(&["compare", &heat, &heat]);
+    assert!(stdout(&read_back).contains("size: 32x24\n"));
+}
+
+/// `--diff-scale N` draws a difference of N levels white, and larger ones white too, so
+/// that differences of a level or two show beside a large one.
+#[test]
+fn diff_scale_shows_small_differences_beside_a_large_one() {
+    let dir = scratch("cli_diff_scale");
+    let (a, b) = (dir.join("a.png"), dir.join("b.png"));
+    image::RgbImage::from_pixel(4, 1, image::Rgb([100, 100, 100]))
+        .save(&a)
+        .unwrap();
+    let mut changed = image::RgbImage::from_pixel(4, 1, image::Rgb([100, 100, 100]));
+    changed.get_pixel_mut(1, 0).0[0] += 1;
+    changed.get_pixel_mut(2, 0).0[1] += 2;
+    changed.get_pixel_mut(3, 0).0[2] += 100;
+    changed.save(&b).unwrap();
+    let map = dir.join("diff.png");
+    let (a, b, map_arg) = (
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        map.to_str().unwrap(),
+    );
+    let heat = |extra: &[&str]| {
+        let mut args = vec!["compare", a, b, "--diff", map_arg];
+        args.extend_from_slice(extra);
+        let run = p3trace(&args);
+        assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+        let pixels: Vec<[u8; 3]> = image::open(&map)
+            .unwrap()
+            .to_rgb8()
+            .pixels()
+            .map(|p| p.0)
+            .collect();
+        (stdout(&run), pixels)
+    };
+    let (printed, pixels) = heat(&["--diff-scale", "2"]);
+    assert!(
+        printed.contains(&format!(
+            "diff: {map_arg} (black 0 levels, then blue, red, yellow, white 2 levels or more)"
+        )),
+        "{printed}"
+    );
+    assert_eq!(pixels[0], [0, 0, 0], "equal");
+    assert_eq!(pixels[1], [255, 0, 0], "1 level of 2: red");
+    assert_eq!(pixels[2], [255, 255, 255], "2 levels: white");
+    assert_eq!(pixels[3], [255, 255, 255], "100 levels: white too");
+    // By default the scale is the largest difference, and 1 level is all but black.
+    let (printed, pixels) = heat(&[]);
+    assert!(printed.contains("white 100 levels)"), "{printed}");
+    assert_eq!(pixels[3], [255, 255, 255]);
+    assert!(pixels[1].iter().all(|&c| c < 16), "{:?}", pixels[1]);
+
+    let without_diff = p3trace(&["compare", a, b, "--diff-scale", "2"]);
+    assert_eq!(without_diff.status.code(), Some(2));
+    let help = stdout(&p3trace(&["compare", "--help"]));
+    assert!(help.contains("--diff-scale"), "{help}");
+}
+
+/// A scene written elsewhere by `gen -o FILE` names the project's skybox by a path that
+/// resolves from FILE's folder; in scenes/ it stays `sky_zup`, as the committed files say;
+/// on standard output it is a path from the current folder.
+#[test]
+fn gen_names_the_skybox_from_where_the_scene_is_written() {
+    let root = common::project_file("");
+    let dir = scratch("cli_gen_paths");
+    let elsewhere = dir.join("elsewhere");
+    std::fs::create_dir(&elsewhere).unwrap();
+    let gen_in = |cwd: &std::path::Path, args: &[&str]| {
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_p3trace"))
+            .args(args)
+            .current_dir(cwd)
+            .output()
+            .unwrap();
+        assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+        run
+    };
+    let env_of = |text: &str| {
+        let line = text.lines().find(|l| l.starts_with("env ")).unwrap();
+        line["env ".len()..].to_string()
+    };
+    // The project's skybox `folder`, and the one the scene `file` generated by `gen
+    // KIND ARGS -o FILE` names, as it is read: from the file's folder.
+    let skyboxes = |folder: &str, file: &std::path::Path, kind_and_args: &[&str]| {
+        let out = ["-o", file.to_str().unwrap()];
+        gen_in(&root, &[&["gen"], kind_and_args, &out].concat());
+        let env = env_of(&std::fs::read_to_string(file).unwrap());
+        let named = file.parent().unwrap().join(&env).canonicalize().unwrap();
+        (root.join(folder).canonicalize().unwrap(), named, env)
+    };
+    let scene = elsewhere.join("balls.p3f");
+    let (project_sky, named, env) = skyboxes("scenes/sky_zup", &scene, &["balls", "--depth", "1"]);
+    assert_eq!(named, project_sky);
+    assert!(env.starts_with("../"), "relative: {env}");
+    // It renders with its sky: unlike the same render without it, and without a warning.
+    let render = |extra: &[&str], name: &str| {
+        let image = dir.join(name).display().to_string();
+        let mut args = vec!["render", scene.to_str().unwrap(), "--resolution", "16x12"];
+        args.extend_from_slice(&["-o", &image]);
+        args.extend_from_slice(extra);
+        let run = succeeds(&args);
+        assert!(!stderr(&run).contains("warning"), "{}", stderr(&run));
+        std::fs::read(&image).unwrap()
+    };
+    assert_ne!(
+        render(&[], "sky.png"),
+        render(&["--no-skybox"], "plain.png")
+    );
+    // --env names a folder from the current one, like every other path.
+    let random = elsewhere.join("random.p3f");
+    let args = ["random", "--env", "scenes/sky_yup"];
+    let (project_sky, named, _) = skyboxes("scenes/sky_yup", &random, &args);
+    assert_eq!(named, project_sky);
+
+    // In a project's scenes/ folder, the committed file, byte for byte.
+    let project = dir.join("project");
+    std::fs::create_dir_all(project.join("scenes/sky_zup")).unwrap();
+    gen_in(
+        &project,
+        &[
+            "gen",
+            "balls",
+            "--depth",
+            "2",
+            "-o",
+            "scenes/balls_medium.p3f",
+        ],
+    );
+    let committed = std::fs::read(root.join("scenes/balls_medium.p3f")).unwrap();
+    let written = std::fs::read(project.join("scenes/balls_medium.p3f")).unwrap();
+    assert!(written == committed, "scenes/balls_medium.p3f differs");
+    // On standard output, from the current folder.
+    let printed = stdout(&gen_in(&project, &["gen", "balls", "--depth", "2"]));
+    assert_eq!(env_of(&printed), "scenes/sky_zup");
+
+    // Where the skybox is missing, gen says so.
+    let run = gen_in(&elsewhere, &["gen", "balls", "--depth", "0", "-o", "b.p3f"]);
+    assert!(
+        stderr(&run).contains("warning: no skybox folder at scenes/sky_zup"),
+        "{}",
+        stderr(&run)
+    );
 }

@@ -49,6 +49,13 @@ pub fn p3trace(args: &[&str]) -> Output {
         .expect("the p3trace binary runs")
 }
 
+/// Runs the `p3trace` binary with `args`, which must succeed.
+pub fn succeeds(args: &[&str]) -> Output {
+    let out = p3trace(args);
+    assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+    out
+}
+
 pub fn stderr(output: &Output) -> String {
     String::from_utf8_lossy(&output.stderr).into_owned()
 }

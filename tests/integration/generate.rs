@@ -209,7 +209,7 @@ fn generated_files_in_scenes_match_their_generators() {
         assert!(
             file == text,
             "scenes/{name}.p3f differs from its generator: regenerate it with the command \
-             in its first lines"
+             in its first lines, from the project's folder with -o scenes/{name}.p3f"
         );
     }
 }

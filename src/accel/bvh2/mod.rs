@@ -21,6 +21,7 @@ use glam::Vec3;
 use super::hit::ClosestHit;
 use super::stack::Stack;
 use crate::intersect::{beyond, Aabb, BoxRay};
+use crate::plural::count;
 use crate::prim::PrimId;
 use crate::ray::Ray;
 use crate::scene::Geometry;
@@ -112,17 +113,17 @@ impl Bvh2Stats {
         vec![
             format!("bvh build: {}", build.trim_start_matches("bvh ")),
             format!(
-                "nodes: {} ({} interior, {} leaves), depth {}",
+                "nodes: {} ({} interior, {}), depth {}",
                 self.nodes,
                 self.nodes - self.leaves,
-                self.leaves,
+                count(self.leaves as u64, "leaf", "leaves"),
                 self.depth
             ),
             format!(
-                "primitives per leaf: {:.2} mean, {} max ({} primitives)",
+                "primitives per leaf: {:.2} mean, {} max ({})",
                 self.leaf_prims as f64 / self.leaves.max(1) as f64,
                 self.max_leaf,
-                self.prims
+                count(self.prims as u64, "primitive", "primitives")
             ),
             format!("sah cost: {:.2}", self.sah_cost),
             format!("memory: {:.2} MiB", self.memory as f64 / (1 << 20) as f64),

@@ -17,6 +17,7 @@ mod traverse;
 
 use super::bvh2::{Bvh2Stats, BvhBuild};
 use crate::intersect::{SpherePack8, SphereRoots, TrianglePack8};
+use crate::plural::count;
 use crate::prim::PrimId;
 use node::{Node8, WIDTH};
 
@@ -54,8 +55,8 @@ impl Bvh8 {
     pub fn stats(&self, name: &str) -> Vec<String> {
         let mut lines = self.binary.lines(name);
         lines.push(format!(
-            "8-wide: {} nodes, depth {}, {:.2} MiB",
-            self.node_count(),
+            "8-wide: {}, depth {}, {:.2} MiB",
+            count(self.node_count() as u64, "node", "nodes"),
             self.depth(),
             self.memory() as f64 / (1 << 20) as f64
         ));
