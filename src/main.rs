@@ -412,12 +412,14 @@ fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
         );
     }
     println!("materials: {}", scene.materials.len());
-    let area = scene
-        .lights
+    let lights: Vec<String> = Light::KINDS
         .iter()
-        .filter(|l| matches!(l, Light::Area { .. }))
-        .count();
-    println!("lights: {} point, {} area", scene.lights.len() - area, area);
+        .map(|&kind| {
+            let n = scene.lights.iter().filter(|l| l.kind() == kind).count();
+            format!("{n} {kind}")
+        })
+        .collect();
+    println!("lights: {}", lights.join(", "));
     let c = &scene.camera;
     println!(
         "camera: from {} at {} up {}, angle {}, {}x{}, hither {}, aperture {}, focal {}",
