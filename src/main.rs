@@ -13,11 +13,9 @@ use std::process::ExitCode;
 use clap::{CommandFactory, Parser};
 
 use cli::{
-    AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand, InfoArgs,
-    MergeArgs, ModeChoice, ProfileChoice, RenderArgs, SceneOutput, UpAxis,
+    BenchArgs, Cli, Command, CompareArgs, GenCommand, InfoArgs, MergeArgs, RenderArgs, SceneOutput,
 };
-use p3trace::accel::{Accel, AccelKind, AccelOptions};
-use p3trace::accel::{BvhBuild, BvhWidth};
+use p3trace::accel::{Accel, AccelOptions};
 use p3trace::compare::levels;
 use p3trace::farm::{self, Canvas};
 use p3trace::generate::{dragon, mountain, random, skybox, sphereflake};
@@ -27,8 +25,7 @@ use p3trace::render::film::{OutputFormat, Placement};
 use p3trace::render::progress::Progress;
 use p3trace::render::region::Region;
 use p3trace::render::sampler::SampleGrid;
-use p3trace::render::shade::Profile;
-use p3trace::render::{self, RenderMode, RenderOptions, Sampling};
+use p3trace::render::{self, RenderOptions, Sampling};
 use p3trace::scene::{self, Frame, Light, Scene};
 
 /// Why the command failed, and so which exit code it gives.
@@ -234,7 +231,7 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     OutputFormat::from_path(&output).map_err(Failure::Usage)?;
     check_output(&output)?;
     check_statistics_target(args.json.as_deref())?;
-    let profile = profile(args.profile);
+    let profile = args.profile;
     let mut scene = load_scene(&args.scene, args.seed, profile.frame())?;
     let scene_hash = scene_hash(&args.scene, args.seed)?;
     // Spheres tested as the profile says, here rather than on a copy in the renderer.
@@ -271,16 +268,13 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     options.skybox = !args.no_skybox;
     options.threads = args.threads.map(|n| n as usize);
     options.seed = args.seed;
-    options.mode = match args.mode {
-        ModeChoice::Scalar => RenderMode::Scalar,
-        ModeChoice::Stream => RenderMode::Stream,
-    };
+    options.mode = args.mode;
     options.progress = match (args.quiet, std::io::stderr().is_terminal()) {
         (true, _) => Progress::Hidden,
         (false, true) => Progress::Bar,
         (false, false) => Progress::Lines,
     };
-    options.accel = accel_options(&scene, &args.accel);
+    options.accel = args.accel.options(scene.accel);
     let (width, height) = (options.width, options.height);
     options.region = match (args.crop, args.pixel_bounds, args.tile) {
         (Some(crop), _, _) => Some(Region::crop(crop, width, height)),
@@ -354,39 +348,6 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn profile(choice: ProfileChoice) -> Profile {
-    match choice {
-        ProfileChoice::Standard => Profile::Standard,
-        ProfileChoice::Course => Profile::Course,
-    }
-}
-
-/// The structure the command line asks for (by default the fastest, whatever the file
-/// says), with its build settings.
-fn accel_options(scene: &Scene, args: &AccelArgs) -> AccelOptions {
-    let kind = match args.accel {
-        AccelChoice::Auto => AccelKind::Bvh,
-        AccelChoice::File => scene.accel.unwrap_or(AccelKind::Bvh),
-        AccelChoice::None => AccelKind::None,
-        AccelChoice::Grid => AccelKind::Grid,
-        AccelChoice::Bvh => AccelKind::Bvh,
-    };
-    AccelOptions {
-        kind,
-        bvh: match args.bvh {
-            BvhChoice::Sah => BvhBuild::Sah,
-            BvhChoice::Midpoint => BvhBuild::Midpoint,
-        },
-        bvh_width: args.bvh_width.map(|n| match n {
-            2 => BvhWidth::Two,
-            _ => BvhWidth::Eight,
-        }),
-        grid_density: args.grid_density,
-        mailbox: args.mailbox,
-        ..AccelOptions::default()
-    }
-}
-
 fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
     // Described in the file's coordinates, as written.
     let scene = load_scene(&args.scene, args.seed, Frame::File)?;
@@ -441,14 +402,14 @@ fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
     println!("spp (file): {}", scene.spp);
     // The structure as `render` builds it: over positions in the profile's frame, moving
     // spheres bounded over the scene's default shutter.
-    let frame = profile(args.profile).frame();
+    let frame = args.profile.frame();
     let rendered = (frame != Frame::File)
         .then(|| read_scene(&args.scene, args.seed, frame))
         .transpose()?;
     let rendered = rendered.as_ref().unwrap_or(&scene);
     let options = AccelOptions {
         shutter: RenderOptions::from_scene(rendered).shutter,
-        ..accel_options(rendered, &args.accel)
+        ..args.accel.options(rendered.accel)
     };
     let (structure, build_time) = Accel::build(&rendered.geometry, &options);
     println!(
@@ -578,7 +539,7 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     check_statistics_target(args.json.as_deref())?;
     // The protocol's rays are made in the file's coordinates, as the Embree harness's.
     let scene = load_scene(&args.scene, args.seed, Frame::File)?;
-    let options = accel_options(&scene, &args.accel);
+    let options = args.accel.options(scene.accel);
     let (accel, build_time) = Accel::build(&scene.geometry, &options);
     let (name, stats) = (accel.name(), accel.stats());
     let tracer = p3trace::accel::Tracer::new(&scene.geometry, accel);
@@ -681,10 +642,6 @@ fn run_gen(command: GenCommand) -> Result<ExitCode, Failure> {
             (dragon::dragon_scene(&mesh, &source, env.as_deref()), out)
         }
         GenCommand::Skybox { up, size, output } => {
-            let up = match up {
-                UpAxis::Y => skybox::Up::Y,
-                UpAxis::Z => skybox::Up::Z,
-            };
             skybox::write_skybox(&output, size, up).map_err(Failure::Run)?;
             return Ok(ExitCode::SUCCESS);
         }
