@@ -21,11 +21,11 @@ use p3trace::farm::{self, Canvas};
 use p3trace::generate::{dragon, mountain, random, skybox, sphereflake};
 use p3trace::plural::{count, noun};
 use p3trace::prim::PrimKind;
-use p3trace::render::film::{OutputFormat, Placement};
+use p3trace::render::film::{Film, OutputFormat, Placement};
 use p3trace::render::progress::Progress;
 use p3trace::render::region::Region;
 use p3trace::render::sampler::SampleGrid;
-use p3trace::render::{self, RenderOptions, Sampling};
+use p3trace::render::{self, RenderOptions, RenderReport, Sampling};
 use p3trace::scene::{self, Frame, Light, Scene};
 
 /// Why the command failed, and so which exit code it gives.
@@ -222,6 +222,21 @@ fn check_statistics_target(target: Option<&Path>) -> Result<(), Failure> {
 }
 
 fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
+    let output = render_output(args)?;
+    let (scene, scene_hash) = render_scene(args)?;
+    let options = render_options(args, &scene)?;
+    let report = render::render(&scene, &options).map_err(Failure::Run)?;
+    for w in &report.warnings {
+        eprintln!("p3trace: warning: {w}");
+    }
+    let note = farm::note(&scene, scene_hash, &options, report.skybox, args.tile);
+    write_image(&output, &options, &report.film, note)?;
+    summarise(args, &scene, &options, &report, &output)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The image `render` writes: `-o`, or the scene's name with .png in the current folder.
+fn render_output(args: &RenderArgs) -> Result<PathBuf, Failure> {
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy();
         PathBuf::from(format!("{stem}.png"))
@@ -231,6 +246,12 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     OutputFormat::from_path(&output).map_err(Failure::Usage)?;
     check_output(&output)?;
     check_statistics_target(args.json.as_deref())?;
+    Ok(output)
+}
+
+/// The scene as `render` takes it, read in the profile's frame, its lens as the flags set
+/// it; and the hash of its text, for the image's note.
+fn render_scene(args: &RenderArgs) -> Result<(Scene, u64), Failure> {
     let profile = args.profile;
     let mut scene = load_scene(&args.scene, args.seed, profile.frame())?;
     let scene_hash = scene_hash(&args.scene, args.seed)?;
@@ -246,15 +267,19 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
         .camera
         .validate()
         .map_err(|e| Failure::Usage(format!("{}: {e}", scene.name)))?;
+    Ok((scene, scene_hash))
+}
 
-    let mut options = RenderOptions::from_scene(&scene);
+/// The scene's render options as the flags change them; an image too large is refused.
+fn render_options(args: &RenderArgs, scene: &Scene) -> Result<RenderOptions, Failure> {
+    let mut options = RenderOptions::from_scene(scene);
     if let Some((w, h)) = args.resolution {
         (options.width, options.height) = (w, h);
     }
     if let Some(n) = args.spp {
         options.sampling = Sampling::from_samples_per_pixel(n).map_err(Failure::Usage)?;
     }
-    options.shade = options.shade.with_profile(profile);
+    options.shade = options.shade.with_profile(args.profile);
     if let Some(depth) = args.max_depth {
         options.shade.max_depth = depth;
     }
@@ -275,37 +300,50 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
         (false, false) => Progress::Lines,
     };
     options.accel = args.accel.options(scene.accel);
-    let (width, height) = (options.width, options.height);
-    options.region = match (args.crop, args.pixel_bounds, args.tile) {
+    options.region = region(args, options.width, options.height)?;
+    options.check_size().map_err(Failure::Usage)?;
+    Ok(options)
+}
+
+/// The region of a `width` x `height` image that `--crop`, `--pixel-bounds` or `--tile`
+/// asks for, if any.
+fn region(args: &RenderArgs, width: u32, height: u32) -> Result<Option<Region>, Failure> {
+    match (args.crop, args.pixel_bounds, args.tile) {
         (Some(crop), _, _) => Some(Region::crop(crop, width, height)),
         (_, Some(bounds), _) => Some(Region::pixel_bounds(bounds, width, height)),
         (_, _, Some(t)) => Some(Region::tile(t.index, t.count, width, height)),
         _ => None,
     }
     .transpose()
-    .map_err(Failure::Usage)?;
-    options.check_size().map_err(Failure::Usage)?;
+    .map_err(Failure::Usage)
+}
 
-    let report = render::render(&scene, &options).map_err(Failure::Run)?;
-    for w in &report.warnings {
-        eprintln!("p3trace: warning: {w}");
-    }
+/// Writes `film`, the pixels of the options' region, to `output` in its place in the
+/// whole image, with the `note` that `merge` checks (kept by EXR files).
+fn write_image(
+    output: &Path,
+    options: &RenderOptions,
+    film: &Film,
+    note: String,
+) -> Result<(), Failure> {
     let region = options.region();
     let placement = Placement {
-        image: (width, height),
+        image: (options.width, options.height),
         origin: (region.x0, region.y0),
-        note: Some(farm::note(
-            &scene,
-            scene_hash,
-            &options,
-            report.skybox,
-            args.tile,
-        )),
+        note: Some(note),
     };
-    report
-        .film
-        .write_placed(&output, &placement)
-        .map_err(Failure::Run)?;
+    film.write_placed(output, &placement).map_err(Failure::Run)
+}
+
+/// What `render` says when done: the structure's build with `--stats`, the closing line
+/// unless `--quiet`, and the statistics with `--json`.
+fn summarise(
+    args: &RenderArgs,
+    scene: &Scene,
+    options: &RenderOptions,
+    report: &RenderReport,
+    output: &Path,
+) -> Result<(), Failure> {
     let say = human_output(args.json.as_deref());
     if args.stats {
         say(&format!(
@@ -318,34 +356,41 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
         }
     }
     if !args.quiet {
-        let seconds = report.elapsed.as_secs_f64();
-        let rays = report.rays.total();
-        let part = if options.region.is_some() {
-            format!(
-                " (region {},{},{},{})",
-                region.x0, region.x1, region.y0, region.y1
-            )
-        } else {
-            String::new()
-        };
-        say(&format!(
-            "{}: {}x{}{part}, {}, {:.3} s, {} {}, {:.2} Mrays/s -> {}",
-            scene.name,
-            options.width,
-            options.height,
-            samples_label(options.sampling),
-            seconds,
-            grouped(rays),
-            noun(rays as f64, "ray", "rays"),
-            rays as f64 / 1e6 / seconds.max(1e-9),
-            output.display()
-        ));
+        say(&closing_line(scene, options, report, output));
     }
     if let Some(target) = &args.json {
-        let value = statistics::render(&scene, &options, &report, &output);
+        let value = statistics::render(scene, options, report, output);
         statistics::write(target, &value).map_err(Failure::Run)?;
     }
-    Ok(ExitCode::SUCCESS)
+    Ok(())
+}
+
+/// `balls_low.p3f: 512x512, 1 spp, 0.128 s, 1,171,239 rays, 9.17 Mrays/s -> balls_low.png`,
+/// the region after the size when there is one.
+fn closing_line(
+    scene: &Scene,
+    options: &RenderOptions,
+    report: &RenderReport,
+    output: &Path,
+) -> String {
+    let seconds = report.elapsed.as_secs_f64();
+    let rays = report.rays.total();
+    let part = match options.region {
+        Some(r) => format!(" (region {},{},{},{})", r.x0, r.x1, r.y0, r.y1),
+        None => String::new(),
+    };
+    format!(
+        "{}: {}x{}{part}, {}, {:.3} s, {} {}, {:.2} Mrays/s -> {}",
+        scene.name,
+        options.width,
+        options.height,
+        samples_label(options.sampling),
+        seconds,
+        grouped(rays),
+        noun(rays as f64, "ray", "rays"),
+        rays as f64 / 1e6 / seconds.max(1e-9),
+        output.display()
+    )
 }
 
 fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
