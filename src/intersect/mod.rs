@@ -111,6 +111,48 @@ pub trait Shapes {
     fn surface_point(&self, i: usize, ray: &Ray, t: f32, u: f32, v: f32) -> SurfacePoint;
 }
 
+/// What a profile chooses in an intersection: the form of the sphere test's quadratic.
+/// Chosen where the tracer is built and handed to the kernels with each query (as
+/// Embree's per-query context), never kept with the geometry.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct IntersectOptions {
+    pub sphere_roots: SphereRoots,
+}
+
+/// A kind whose primitives the 8-wide BVH stores side by side (`packed` in
+/// `prim_kinds!`): up to eight of them in a leaf's pack, tested against one ray by the
+/// kind's leaf kernel, or slot by slot against a packet by its packet kernel. Each slot's
+/// answer is the scalar test's ([`Shapes::intersect`]) bit for bit.
+pub trait LeafPack: Shapes {
+    /// Eight primitives side by side; unused slots are padding that no ray hits.
+    type Pack: Clone + Copy + std::fmt::Debug;
+
+    /// The primitives `indices` (one to eight) as a pack.
+    fn pack(&self, indices: impl Iterator<Item = usize>) -> Self::Pack;
+
+    /// One ray (`inv_dir = 1 / ray.dir`) against the eight slots of `pack`, within
+    /// `(t_min, t_max)`.
+    fn leaf(
+        pack: &Self::Pack,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+        options: IntersectOptions,
+    ) -> TriangleHit8;
+
+    /// The primitive in slot `slot` of `pack` against the lanes `active` of `packet`,
+    /// each lane within `(packet.t_min, t_max)`.
+    fn slot_packet(
+        pack: &Self::Pack,
+        slot: usize,
+        packet: &RayPacket,
+        t_max: F32x8,
+        active: u8,
+        options: IntersectOptions,
+    ) -> TriangleHit8;
+}
+
 /// Three parallel arrays of coordinates.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Vec3s {

@@ -5,7 +5,10 @@
 use glam::Vec3;
 
 use super::{first_root_in, first_root_in8};
-use super::{gamma, packet_hits, packet_interval, Aabb, Shapes, SurfacePoint, TriangleHit, Vec3s};
+use super::{
+    gamma, packet_hits, packet_interval, Aabb, IntersectOptions, LeafPack, Shapes, SurfacePoint,
+    TriangleHit, TriangleHit8, Vec3s,
+};
 
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
@@ -196,13 +199,42 @@ pub struct Spheres {
     pub roots: SphereRoots,
 }
 
-impl Spheres {
-    /// The spheres `indices` (at most eight) side by side, for a BVH leaf.
-    pub fn pack(&self, indices: impl Iterator<Item = usize>) -> SpherePack8 {
+impl LeafPack for Spheres {
+    type Pack = SpherePack8;
+
+    fn pack(&self, indices: impl Iterator<Item = usize>) -> SpherePack8 {
         let spheres: Vec<(Vec3, f32)> = indices
             .map(|i| (self.centre.get(i), self.radius[i]))
             .collect();
         SpherePack8::new(&spheres)
+    }
+
+    #[inline]
+    fn leaf(
+        pack: &SpherePack8,
+        ray: &Ray,
+        _inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+        options: IntersectOptions,
+    ) -> TriangleHit8 {
+        TriangleHit8::at(sphere_leaf(ray, pack, options.sphere_roots, t_min, t_max))
+    }
+
+    #[inline(always)]
+    fn slot_packet(
+        pack: &SpherePack8,
+        slot: usize,
+        packet: &RayPacket,
+        t_max: F32x8,
+        active: u8,
+        options: IntersectOptions,
+    ) -> TriangleHit8 {
+        let (centre, radius) = (pack.centre.lane(slot), pack.radius.to_array()[slot]);
+        let (roots, t_min) = (options.sphere_roots, F32x8::splat(packet.t_min));
+        TriangleHit8::at(sphere_packet(
+            packet, centre, radius, roots, t_min, t_max, active,
+        ))
     }
 }
 

@@ -4,7 +4,9 @@
 
 use glam::Vec3;
 
-use super::{gamma, packet_interval, Aabb, Shapes, SurfacePoint, Vec3s};
+use super::{
+    gamma, packet_interval, Aabb, IntersectOptions, LeafPack, Shapes, SurfacePoint, Vec3s,
+};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -63,6 +65,18 @@ pub struct TriangleHit8 {
     pub t: F32x8,
     pub u: F32x8,
     pub v: F32x8,
+}
+
+impl TriangleHit8 {
+    /// Hits at `t` with no barycentrics: the hits of the other kinds.
+    pub fn at((hit, t): (Mask8, F32x8)) -> Self {
+        TriangleHit8 {
+            hit,
+            t,
+            u: F32x8::ZERO,
+            v: F32x8::ZERO,
+        }
+    }
 }
 
 /// Eight triangles side by side for [`triangle_leaf`], stored as the scene stores them
@@ -196,14 +210,6 @@ impl Triangles {
         }
     }
 
-    /// The triangles `indices` (at most eight) side by side, for a BVH leaf.
-    pub fn pack(&self, indices: impl Iterator<Item = usize>) -> TrianglePack8 {
-        let tris: Vec<[Vec3; 3]> = indices
-            .map(|i| [self.p0.get(i), self.e1.get(i), self.e2.get(i)])
-            .collect();
-        TrianglePack8::new(&tris)
-    }
-
     /// Unit geometric normal `normalize(e1 x e2)`.
     pub fn geometric_normal(&self, i: usize) -> Vec3 {
         self.e1.get(i).cross(self.e2.get(i)).normalize_or_zero()
@@ -221,6 +227,50 @@ impl Triangles {
                     .unwrap_or_else(geometric)
             }
         }
+    }
+}
+
+impl LeafPack for Triangles {
+    type Pack = TrianglePack8;
+
+    fn pack(&self, indices: impl Iterator<Item = usize>) -> TrianglePack8 {
+        let tris: Vec<[Vec3; 3]> = indices
+            .map(|i| [self.p0.get(i), self.e1.get(i), self.e2.get(i)])
+            .collect();
+        TrianglePack8::new(&tris)
+    }
+
+    #[inline]
+    fn leaf(
+        pack: &TrianglePack8,
+        ray: &Ray,
+        _inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+        _options: IntersectOptions,
+    ) -> TriangleHit8 {
+        triangle_leaf(ray, pack, t_min, t_max)
+    }
+
+    #[inline(always)]
+    fn slot_packet(
+        pack: &TrianglePack8,
+        slot: usize,
+        packet: &RayPacket,
+        t_max: F32x8,
+        active: u8,
+        _options: IntersectOptions,
+    ) -> TriangleHit8 {
+        let (p0, e1, e2) = (pack.p0.lane(slot), pack.e1.lane(slot), pack.e2.lane(slot));
+        triangle_packet(
+            packet,
+            p0,
+            e1,
+            e2,
+            F32x8::splat(packet.t_min),
+            t_max,
+            active,
+        )
     }
 }
 

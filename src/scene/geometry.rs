@@ -10,7 +10,7 @@ use crate::prim::{prim_kinds, PrimId, PrimKind};
 use crate::ray::{Ray, RayPacket};
 
 macro_rules! define_geometry {
-    ($($kind:ident, $field:ident, $storage:ident, $name:literal, $bound:ident;)*) => {
+    ($($kind:ident, $field:ident, $storage:ident, $name:literal, $bound:ident, $pack:ident;)*) => {
         /// All primitives of a scene, by kind.
         #[derive(Clone, Debug, Default)]
         pub struct Geometry {

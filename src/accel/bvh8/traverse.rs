@@ -1,15 +1,14 @@
 //! Single-ray traversal of the 8-wide tree: one ray against a node's eight boxes at
-//! once, nearest child first; leaves of packed triangles or spheres tested eight at a
-//! time.
+//! once, nearest child first; a pack leaf's primitives tested eight at a time.
 
 use glam::Vec3;
 
-use super::node::{leaf_parts, ChildRef, LEAF, SPHERES, TRIANGLES};
+use super::node::{leaf_parts, ChildRef, LEAF};
 use super::{Bvh8, STACK_SIZE};
 use crate::accel::hit::{for_lanes, ClosestHit};
 use crate::accel::stack::Stack;
-use crate::intersect::{beyond, sphere_leaf, triangle_leaf, BoxRay};
-use crate::ray::{Hit, Ray};
+use crate::intersect::{beyond, BoxRay};
+use crate::ray::Ray;
 use crate::scene::Geometry;
 
 impl Bvh8 {
@@ -24,43 +23,14 @@ impl Bvh8 {
         t_min: f32,
         closest: &mut ClosestHit,
     ) {
-        let (kind, count, index) = leaf_parts(child);
-        match kind {
-            TRIANGLES => {
-                let hits = triangle_leaf(ray, &self.triangles[index], t_min, closest.bound());
-                let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
-                let ids = &self.triangle_ids[index];
-                for_lanes(hits.hit.bitmask(), |k| {
-                    closest.offer(Hit {
-                        t: t[k],
-                        prim: ids[k],
-                        u: u[k],
-                        v: v[k],
-                    })
-                });
-            }
-            SPHERES => {
-                let (hit, t) = sphere_leaf(
-                    ray,
-                    &self.spheres[index],
-                    self.sphere_roots,
-                    t_min,
-                    closest.bound(),
-                );
-                let (t, ids) = (t.to_array(), &self.sphere_ids[index]);
-                for_lanes(hit.bitmask(), |k| {
-                    closest.offer(Hit {
-                        t: t[k],
-                        prim: ids[k],
-                        u: 0.0,
-                        v: 0.0,
-                    })
-                });
-            }
-            _ => {
-                for &prim in &self.prims[index..index + count] {
-                    closest.test(geometry, prim, ray, inv_dir, t_min);
-                }
+        let options = self.options;
+        if !self
+            .leaves
+            .closest(child, ray, inv_dir, t_min, options, closest)
+        {
+            let (_, count, index) = leaf_parts(child);
+            for &prim in &self.prims[index..index + count] {
+                closest.test(geometry, prim, ray, inv_dir, t_min);
             }
         }
     }
@@ -76,20 +46,18 @@ impl Bvh8 {
         t_min: f32,
         t_max: f32,
     ) -> bool {
-        let (kind, count, index) = leaf_parts(child);
-        match kind {
-            TRIANGLES => triangle_leaf(ray, &self.triangles[index], t_min, t_max)
-                .hit
-                .any(),
-            SPHERES => sphere_leaf(ray, &self.spheres[index], self.sphere_roots, t_min, t_max)
-                .0
-                .any(),
-            _ => self.prims[index..index + count].iter().any(|&prim| {
+        let options = self.options;
+        let in_pack = self
+            .leaves
+            .blocks(child, ray, inv_dir, t_min, t_max, options);
+        in_pack.unwrap_or_else(|| {
+            let (_, count, index) = leaf_parts(child);
+            self.prims[index..index + count].iter().any(|&prim| {
                 geometry
                     .intersect(prim, ray, inv_dir, t_min, t_max)
                     .is_some()
-            }),
-        }
+            })
+        })
     }
 
     pub fn closest(
@@ -150,6 +118,7 @@ impl Bvh8 {
     }
 
     /// [`Bvh8::occluded`] over the subtree under `start`.
+    #[inline(always)]
     pub(super) fn occluded_from(
         &self,
         start: ChildRef,
