@@ -31,7 +31,7 @@ macro_rules! prim_kinds {
             Sphere, spheres, Spheres, "spheres", bounded, packed;
             MovingSphere, moving_spheres, MovingSpheres, "moving spheres", bounded, unpacked;
             Triangle, triangles, Triangles, "triangles", bounded, packed;
-            Box, boxes, Boxes, "boxes", bounded, unpacked;
+            Box, boxes, Boxes, "boxes", bounded, packed;
             Cone, cones, Cones, "cones and cylinders", bounded, unpacked;
             Plane, planes, Planes, "planes", unbounded, unpacked;
         }

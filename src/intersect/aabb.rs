@@ -1,14 +1,19 @@
-//! The Box primitive's test: exact, it returns where the ray meets the box's surface (the
-//! entry, or the exit from inside) in the open interval `(t_min, t_max)`, as every
-//! primitive test does, so a ray passing beside the box misses it. The acceleration
-//! structures' box test is another routine with another contract (`interval.rs`: where the
-//! ray may be inside, allowing for rounding, erring towards visiting); sharing code would
-//! change this test's bits, and so the images of scenes with boxes.
+//! The Box primitive's test and its SIMD twins (eight rays against one box; one ray
+//! against a [`BoxPack8`] of a BVH leaf). It is exact: it returns where the ray meets the
+//! box's surface (the entry, or the exit from inside) in the open interval
+//! `(t_min, t_max)`, as every primitive test does, so a ray passing beside the box misses
+//! it. The acceleration structures' box test is another routine with another contract
+//! (`interval.rs`: where the ray may be inside, allowing for rounding, erring towards
+//! visiting); sharing code would change this test's bits, and so the images of scenes
+//! with boxes.
 
 use glam::Vec3;
 
 use super::{first_root_in, first_root_in8};
-use super::{packet_hits, packet_interval, Aabb, Shapes, SurfacePoint, TriangleHit, Vec3s};
+use super::{
+    packet_hits, packet_interval, Aabb, IntersectOptions, LeafPack, Shapes, SurfacePoint,
+    TriangleHit, TriangleHit8, Vec3s,
+};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -180,6 +185,42 @@ pub struct Boxes {
     pub min: Vec3s,
     pub max: Vec3s,
     pub material: Vec<u32>,
+}
+
+impl LeafPack for Boxes {
+    type Pack = BoxPack8;
+
+    fn pack(&self, indices: impl Iterator<Item = usize>) -> BoxPack8 {
+        let boxes: Vec<(Vec3, Vec3)> = indices
+            .map(|i| (self.min.get(i), self.max.get(i)))
+            .collect();
+        BoxPack8::new(&boxes)
+    }
+
+    #[inline]
+    fn leaf(
+        pack: &BoxPack8,
+        ray: &Ray,
+        inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+        _options: IntersectOptions,
+    ) -> TriangleHit8 {
+        TriangleHit8::at(aabb_leaf(ray, inv_dir, pack, t_min, t_max))
+    }
+
+    #[inline(always)]
+    fn slot_packet(
+        pack: &BoxPack8,
+        slot: usize,
+        packet: &RayPacket,
+        t_max: F32x8,
+        active: u8,
+        _options: IntersectOptions,
+    ) -> TriangleHit8 {
+        let ((min, max), t_min) = (pack.corners(slot), F32x8::splat(packet.t_min));
+        TriangleHit8::at(aabb_packet(packet, min, max, t_min, t_max, active))
+    }
 }
 
 impl Shapes for Boxes {

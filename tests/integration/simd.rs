@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 use p3trace::intersect::{
-    self, BoxPack8, BoxRay, BoxRay8, IntersectOptions, Intervals8, LeafPack, SpherePack8,
+    self, BoxPack8, BoxRay, BoxRay8, Boxes, IntersectOptions, Intervals8, LeafPack, SpherePack8,
     SphereRoots, Spheres, TriangleHit, TriangleHit8, TrianglePack8, Triangles,
 };
 use p3trace::ray::{Ray, RayPacket};
@@ -420,6 +420,22 @@ proptest! {
             storage.push([p0, p0 + e1, p0 + e2], None, 0);
         }
         pack_equals_scalar("triangle pack", &storage, &ray, limits, &p, IntersectOptions::default());
+    }
+
+    #[test]
+    fn box_pack_equals_scalar(
+        ray in ray(),
+        limits in interval(),
+        p in packet(),
+        boxes in prop::collection::vec(aabb(), 0..=8),
+    ) {
+        let mut storage = Boxes::default();
+        for (lo, hi) in boxes {
+            storage.min.push(lo);
+            storage.max.push(hi);
+            storage.material.push(0);
+        }
+        pack_equals_scalar("box pack", &storage, &ray, limits, &p, IntersectOptions::default());
     }
 
     #[test]
