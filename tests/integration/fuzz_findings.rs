@@ -244,6 +244,36 @@ fn thin_cone_seen_from_1e9_away_is_missed() {
     }
 }
 
+/// Open, found by a measurement scene of 20,000 random cones (2026-12-01, while packing
+/// BVH leaves; the same at 85afa97): a pointed cone seen from 30 units away, the ray
+/// passing 0.02 from its axis near the apex, where its radius is 0.00016. The cone test
+/// reports a hit there, off the cone and outside its box: brute force and the grid find
+/// it, and the 8-wide BVH finds it or not as the shape of its tree has the box that holds
+/// the cone also hold the point, so that scene's BVH image depends on the tree.
+#[test]
+#[ignore = "open finding: a pointed cone's test hits off the cone near its apex"]
+fn pointed_cone_is_hit_only_on_its_surface() {
+    let scene = parse_text("c\n8.0116 9.6824 2.9841 0.0696\n7.6587 10.0031 3.4615 0\n").unwrap();
+    let cones = &scene.geometry.cones;
+    let (base, axis, height) = (cones.base.get(0), cones.axis.get(0), cones.height[0]);
+    let ray = Ray::new(
+        Vec3::new(30.0, 20.0, 30.0),
+        Vec3::new(-0.6189494, -0.2768653, -0.7350151),
+    );
+    let hit = Tracer::new(&scene.geometry, Accel::None).closest(&ray, 0.0, f32::INFINITY);
+    if let Some(hit) = hit {
+        let offset = ray.at(hit.t) - base;
+        let along = offset.dot(axis);
+        let radius = cones.r_base[0] * (1.0 - along / height);
+        let from_axis = (offset - along * axis).length();
+        assert!(
+            (from_axis - radius).abs() < 1e-3,
+            "hit at t = {}: {from_axis} from the axis, where the radius is {radius}",
+            hit.t
+        );
+    }
+}
+
 /// Open, found by `tests/accel.rs`'s property test on 2026-11-30 (present before that
 /// day's restructuring, which did not change it): a sliver triangle in the plane `y = 0`
 /// whose edges are parallel to within rounding (`|e1 x e2| / (|e1| |e2|)` is about 6e-8,
