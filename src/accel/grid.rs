@@ -21,10 +21,11 @@ use glam::{IVec3, UVec3, Vec3};
 
 use super::bounds::prim_bounds;
 use super::hit::{for_lanes, test_packet, ClosestHit};
-use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay};
+use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay, RayQuery, RayQuery8};
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::scene::Geometry;
+use crate::simd::F32x8;
 
 /// The report's `m`.
 pub const DEFAULT_DENSITY: f32 = 2.0;
@@ -162,19 +163,12 @@ impl Grid {
         }
     }
 
-    pub fn closest(
-        &self,
-        geometry: &Geometry,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        closest: &mut ClosestHit,
-    ) {
+    pub fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
         Mailbox::with(self.mailbox, self.prims.len(), |mailbox| {
-            self.walk(ray, inv_dir, t_min, closest.limit(), |cell_refs, t_exit| {
+            self.walk(query, closest.limit(), |cell_refs, t_exit| {
                 for &r in cell_refs {
                     if mailbox.first_visit(r) {
-                        closest.test(geometry, self.prims[r as usize], ray, inv_dir, t_min);
+                        closest.test(geometry, self.prims[r as usize], query);
                     }
                 }
                 // Stop once the closest hit lies inside the cells walked so far (by the
@@ -187,22 +181,13 @@ impl Grid {
         });
     }
 
-    pub fn occluded(
-        &self,
-        geometry: &Geometry,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> bool {
+    pub fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
         let mut blocked = false;
         Mailbox::with(self.mailbox, self.prims.len(), |mailbox| {
-            self.walk(ray, inv_dir, t_min, t_max, |cell_refs, _| {
+            self.walk(query, t_max, |cell_refs, _| {
                 blocked = cell_refs.iter().any(|&r| {
                     mailbox.first_visit(r)
-                        && geometry
-                            .intersect(self.prims[r as usize], ray, inv_dir, t_min, t_max)
-                            .is_some()
+                        && (geometry.intersect(self.prims[r as usize], query, t_max)).is_some()
                 });
                 if blocked {
                     Walk::Stop
@@ -216,15 +201,9 @@ impl Grid {
 
     /// The 3D-DDA: calls `visit` with each cell's objects and the distance at which the
     /// ray leaves that cell, in order along the ray, while `visit` says to continue and
-    /// the ray is within `(t_min, t_max)` (which `visit` may shrink).
-    fn walk(
-        &self,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-        mut visit: impl FnMut(&[u32], f32) -> Walk,
-    ) {
+    /// the ray is within `(query.t_min, t_max)` (which `visit` may shrink).
+    fn walk(&self, query: &RayQuery, t_max: f32, mut visit: impl FnMut(&[u32], f32) -> Walk) {
+        let (ray, inv_dir, t_min) = (&query.ray, query.inv_dir, query.t_min);
         let Some(mut dda) = Dda::start(self, ray, inv_dir, t_min, t_max) else {
             return;
         };
@@ -242,7 +221,7 @@ impl Grid {
         }
     }
 
-    /// The closest hits of the active lanes of `packet`, as [`Grid::closest`] finds
+    /// The closest hits of the active lanes of `query`'s packet, as [`Grid::closest`] finds
     /// each. Each lane walks its own 3D-DDA; at every step the lanes that stand in the
     /// same cell test its objects together, by the primitives' packet kernels (so a
     /// coherent packet tests each object once for all its rays). Mailboxing plays no
@@ -250,10 +229,10 @@ impl Grid {
     pub fn closest_packet(
         &self,
         geometry: &Geometry,
-        packet: &RayPacket,
-        closest: &mut [ClosestHit; 8],
+        query: &RayQuery8,
+        hits: &mut [ClosestHit; 8],
     ) {
-        let (rays, t_min) = (packet.rays, packet.t_min);
+        let (closest, packet) = (hits, query.packet);
         let packet_inv_dir = packet.inv_dir_lanes();
         let limits = closest.each_ref().map(|c| c.limit());
         let mut walks = self.start_walks(packet, &packet_inv_dir, &limits);
@@ -265,16 +244,15 @@ impl Grid {
             for_cell_groups(&walks, walking, |cell, lanes| {
                 if lanes.count_ones() <= SINGLE_RAY_LANES {
                     for_lanes(lanes, |k| {
-                        let ray = &rays[k];
+                        let lane = query.lane(k);
                         for &r in self.cell_refs(cell) {
-                            let prim = self.prims[r as usize];
-                            closest[k].test(geometry, prim, ray, packet_inv_dir[k], t_min);
+                            closest[k].test(geometry, self.prims[r as usize], &lane);
                         }
                     });
                     return;
                 }
                 for &r in self.cell_refs(cell) {
-                    test_packet(closest, geometry, self.prims[r as usize], packet, lanes);
+                    test_packet(closest, geometry, self.prims[r as usize], query, lanes);
                 }
             });
             for (k, walk) in walks.iter_mut().enumerate() {
@@ -290,10 +268,10 @@ impl Grid {
         }
     }
 
-    /// The active lanes of `packet` whose ray is blocked within its interval, walked as
-    /// in [`Grid::closest_packet`].
-    pub fn occluded_packet(&self, geometry: &Geometry, packet: &RayPacket) -> u8 {
-        let (rays, t_min, t_max) = (packet.rays, packet.t_min, &packet.t_max);
+    /// The active lanes of `query`'s packet whose ray is blocked within its interval,
+    /// walked as in [`Grid::closest_packet`].
+    pub fn occluded_packet(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
+        let (packet, t_max) = (query.packet, &query.packet.t_max);
         let packet_inv_dir = packet.inv_dir_lanes();
         let mut walks = self.start_walks(packet, &packet_inv_dir, t_max);
         let mut blocked = 0u8;
@@ -305,12 +283,10 @@ impl Grid {
             for_cell_groups(&walks, walking, |cell, lanes| {
                 if lanes.count_ones() <= SINGLE_RAY_LANES {
                     for_lanes(lanes, |k| {
-                        let ray = &rays[k];
+                        let lane = query.lane(k);
                         let hit = self.cell_refs(cell).iter().any(|&r| {
                             let prim = self.prims[r as usize];
-                            geometry
-                                .intersect(prim, ray, packet_inv_dir[k], t_min, t_max[k])
-                                .is_some()
+                            geometry.intersect(prim, &lane, t_max[k]).is_some()
                         });
                         if hit {
                             blocked |= 1 << k;
@@ -324,12 +300,8 @@ impl Grid {
                         break;
                     }
                     let prim = self.prims[r as usize];
-                    let hits = geometry.intersect_packet(prim, packet, t_max, open);
-                    for (k, hit) in hits.iter().enumerate() {
-                        if hit.is_some() {
-                            blocked |= 1 << k;
-                        }
-                    }
+                    let hits = geometry.intersect8(prim, query, F32x8::from_array(*t_max), open);
+                    blocked |= hits.hit.bitmask() & open;
                 }
             });
             for (k, walk) in walks.iter_mut().enumerate() {

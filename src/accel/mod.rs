@@ -24,8 +24,7 @@ mod stack;
 
 use std::time::{Duration, Instant};
 
-use glam::Vec3;
-
+use crate::intersect::{IntersectOptions, RayQuery, RayQuery8};
 use crate::prim::PrimKind;
 use crate::ray::{lane_mask, Hit, Ray, RayPacket};
 pub use crate::scene::AccelKind;
@@ -96,6 +95,9 @@ pub struct AccelOptions {
     /// The shutter interval: moving spheres are bounded over all of it (`render` sets
     /// it from `RenderOptions::shutter`).
     pub shutter: [f32; 2],
+    /// What the profile chooses in the primitives' tests, which every query carries
+    /// (`render` sets it from the shading profile).
+    pub intersect: IntersectOptions,
 }
 
 impl Default for AccelOptions {
@@ -107,15 +109,25 @@ impl Default for AccelOptions {
             grid_density: grid::DEFAULT_DENSITY,
             mailbox: false,
             shutter: [0.0, 0.0],
+            intersect: IntersectOptions::default(),
+        }
+    }
+}
+
+impl AccelOptions {
+    /// Brute force, the reference every structure answers as.
+    pub fn brute_force() -> Self {
+        AccelOptions {
+            kind: AccelKind::None,
+            ..AccelOptions::default()
         }
     }
 }
 
 impl Accel {
-    /// Builds the structure `options` asks for, and says how long that took.
-    pub fn build(geometry: &Geometry, options: &AccelOptions) -> (Accel, Duration) {
-        let start = Instant::now();
-        let accel = match options.kind {
+    /// Builds the structure `options` asks for.
+    fn build(geometry: &Geometry, options: &AccelOptions) -> Accel {
+        match options.kind {
             AccelKind::None => Accel::None,
             AccelKind::Grid => Accel::Grid(Grid::build(
                 geometry,
@@ -134,8 +146,7 @@ impl Accel {
                     },
                 }
             }
-        };
-        (accel, start.elapsed())
+        }
     }
 
     /// A short name: `none`, `grid`, `grid+mailbox`, `bvh midpoint`, `bvh sah`, with the
@@ -163,12 +174,39 @@ impl Accel {
 /// Answers ray queries for one scene: the accelerator for bounded primitives, planes apart.
 pub struct Tracer<'s> {
     pub geometry: &'s Geometry,
-    pub accel: Accel,
+    accel: Accel,
+    /// What the profile chose in the primitives' tests: every query carries it.
+    options: IntersectOptions,
+    build_time: Duration,
 }
 
 impl<'s> Tracer<'s> {
-    pub fn new(geometry: &'s Geometry, accel: Accel) -> Self {
-        Tracer { geometry, accel }
+    /// Builds the structure `options` asks for over `geometry`, whose queries test the
+    /// primitives as `options.intersect` says.
+    pub fn new(geometry: &'s Geometry, options: &AccelOptions) -> Self {
+        let start = Instant::now();
+        let accel = Accel::build(geometry, options);
+        Tracer {
+            geometry,
+            accel,
+            options: options.intersect,
+            build_time: start.elapsed(),
+        }
+    }
+
+    /// The structure's short name ([`Accel::name`]).
+    pub fn name(&self) -> String {
+        self.accel.name()
+    }
+
+    /// The structure's statistics, one `name: value` per line.
+    pub fn stats(&self) -> Vec<String> {
+        self.accel.stats()
+    }
+
+    /// How long building the structure took.
+    pub fn build_time(&self) -> Duration {
+        self.build_time
     }
 
     /// The closest hit with `t` in `(t_min, t_max)`.
@@ -176,30 +214,23 @@ impl<'s> Tracer<'s> {
         if !ray.is_traceable() {
             return None;
         }
-        let inv_dir = ray.dir.recip();
+        let query = RayQuery::new(ray, t_min, self.options);
         let mut closest = ClosestHit::new(t_max);
         let g = self.geometry;
         match &self.accel {
-            Accel::None => none::closest(g, ray, inv_dir, t_min, &mut closest),
-            Accel::Grid(grid) => grid.closest(g, ray, inv_dir, t_min, &mut closest),
-            Accel::Bvh2(bvh) => bvh.closest(g, ray, inv_dir, t_min, &mut closest),
-            Accel::Bvh8(bvh) => bvh.closest(g, ray, inv_dir, t_min, &mut closest),
+            Accel::None => none::closest(g, &query, &mut closest),
+            Accel::Grid(grid) => grid.closest(g, &query, &mut closest),
+            Accel::Bvh2(bvh) => bvh.closest(g, &query, &mut closest),
+            Accel::Bvh8(bvh) => bvh.closest(g, &query, &mut closest),
         }
-        self.nearer_plane(ray, inv_dir, t_min, t_max, closest.hit())
+        self.nearer_plane(&query, t_max, closest.hit())
     }
 
     /// The closest hit among the planes and `bounded`, the accelerator's. Planes come
     /// last in id order, so a plane at the same `t` loses the tie.
-    fn nearer_plane(
-        &self,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-        bounded: Option<Hit>,
-    ) -> Option<Hit> {
+    fn nearer_plane(&self, query: &RayQuery, t_max: f32, bounded: Option<Hit>) -> Option<Hit> {
         let t_max = bounded.map_or(t_max, |h| h.t);
-        self.closest_plane(ray, inv_dir, t_min, t_max).or(bounded)
+        self.closest_plane(query, t_max).or(bounded)
     }
 
     /// Whether anything blocks the ray within `(t_min, t_max)`.
@@ -207,14 +238,14 @@ impl<'s> Tracer<'s> {
         if !ray.is_traceable() {
             return false;
         }
-        let inv_dir = ray.dir.recip();
+        let query = RayQuery::new(ray, t_min, self.options);
         let g = self.geometry;
-        self.closest_plane(ray, inv_dir, t_min, t_max).is_some()
+        self.closest_plane(&query, t_max).is_some()
             || match &self.accel {
-                Accel::None => none::occluded(g, ray, inv_dir, t_min, t_max),
-                Accel::Grid(grid) => grid.occluded(g, ray, inv_dir, t_min, t_max),
-                Accel::Bvh2(bvh) => bvh.occluded(g, ray, inv_dir, t_min, t_max),
-                Accel::Bvh8(bvh) => bvh.occluded(g, ray, inv_dir, t_min, t_max),
+                Accel::None => none::occluded(g, &query, t_max),
+                Accel::Grid(grid) => grid.occluded(g, &query, t_max),
+                Accel::Bvh2(bvh) => bvh.occluded(g, &query, t_max),
+                Accel::Bvh8(bvh) => bvh.occluded(g, &query, t_max),
             }
     }
 
@@ -230,9 +261,13 @@ impl<'s> Tracer<'s> {
         let mut closest = packet.t_max.map(ClosestHit::new);
         let g = self.geometry;
         let (rays, t_min, t_max) = (packet.rays, packet.t_min, &packet.t_max);
+        let query = RayQuery8 {
+            packet,
+            options: self.options,
+        };
         match &self.accel {
-            Accel::Bvh8(bvh) => bvh.closest_packet(g, packet, &mut closest),
-            Accel::Grid(grid) => grid.closest_packet(g, packet, &mut closest),
+            Accel::Bvh8(bvh) => bvh.closest_packet(g, &query, &mut closest),
+            Accel::Grid(grid) => grid.closest_packet(g, &query, &mut closest),
             Accel::None | Accel::Bvh2(_) => {
                 return std::array::from_fn(|k| {
                     (active & (1 << k) != 0)
@@ -242,7 +277,7 @@ impl<'s> Tracer<'s> {
             }
         }
         // As `nearer_plane` for each lane: a plane must be closer than the structure's hit.
-        let planes = self.closest_planes(packet, active, closest.map(|c| c.limit()));
+        let planes = self.closest_planes(&query, active, closest.map(|c| c.limit()));
         let bounded = closest.map(|c| c.hit());
         std::array::from_fn(|k| {
             (active & (1 << k) != 0)
@@ -257,13 +292,18 @@ impl<'s> Tracer<'s> {
     pub fn occluded_packet(&self, packet: &RayPacket) -> u8 {
         let (rays, t_min, t_max) = (packet.rays, packet.t_min, &packet.t_max);
         let active = packet.active & packet.traceable();
-        let planes = self.closest_planes(packet, active, *t_max);
+        let options = self.options;
+        let planes = self.closest_planes(&RayQuery8 { packet, options }, active, *t_max);
         let by_plane = lane_mask(|k| planes[k].is_some());
         let rest = packet.with_active(active & !by_plane);
+        let query = RayQuery8 {
+            packet: &rest,
+            options,
+        };
         let g = self.geometry;
         let blocked = match &self.accel {
-            Accel::Bvh8(bvh) => bvh.occluded_packet(g, &rest),
-            Accel::Grid(grid) => grid.occluded_packet(g, &rest),
+            Accel::Bvh8(bvh) => bvh.occluded_packet(g, &query),
+            Accel::Grid(grid) => grid.occluded_packet(g, &query),
             Accel::None | Accel::Bvh2(_) => lane_mask(|k| {
                 rest.active & (1 << k) != 0 && self.occluded(&rays[k], t_min, t_max[k])
             }),
@@ -271,11 +311,11 @@ impl<'s> Tracer<'s> {
         by_plane | blocked
     }
 
-    /// [`Tracer::closest_plane`] for the lanes `lanes` of `packet`, each within
+    /// [`Tracer::closest_plane`] for the lanes `lanes` of `query`'s packet, each within
     /// `(t_min, t_max[k])`: each plane against the eight rays at once by its packet
     /// kernel, which answers each lane as the scalar test does
     /// (`tests/integration/simd.rs`).
-    fn closest_planes(&self, packet: &RayPacket, lanes: u8, t_max: [f32; 8]) -> [Option<Hit>; 8] {
+    fn closest_planes(&self, query: &RayQuery8, lanes: u8, t_max: [f32; 8]) -> [Option<Hit>; 8] {
         if PrimKind::UNBOUNDED
             .iter()
             .all(|&kind| self.geometry.count(kind) == 0)
@@ -285,18 +325,18 @@ impl<'s> Tracer<'s> {
         let mut closest = t_max.map(ClosestHit::new);
         for kind in PrimKind::UNBOUNDED {
             for prim in self.geometry.ids(kind) {
-                test_packet(&mut closest, self.geometry, prim, packet, lanes);
+                test_packet(&mut closest, self.geometry, prim, query, lanes);
             }
         }
         closest.map(|c| c.hit())
     }
 
     /// The closest hit among the unbounded primitives (planes), which no structure holds.
-    fn closest_plane(&self, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
+    fn closest_plane(&self, query: &RayQuery, t_max: f32) -> Option<Hit> {
         let mut closest = ClosestHit::new(t_max);
         for kind in PrimKind::UNBOUNDED {
             for prim in self.geometry.ids(kind) {
-                closest.test(self.geometry, prim, ray, inv_dir, t_min);
+                closest.test(self.geometry, prim, query);
             }
         }
         closest.hit()

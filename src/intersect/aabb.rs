@@ -11,8 +11,7 @@ use glam::Vec3;
 
 use super::{first_root_in, first_root_in8};
 use super::{
-    packet_hits, packet_interval, Aabb, IntersectOptions, LeafPack, Shapes, SurfacePoint,
-    TriangleHit, TriangleHit8, Vec3s,
+    Aabb, LeafPack, RayQuery, RayQuery8, Shapes, SurfacePoint, TriangleHit, TriangleHit8, Vec3s,
 };
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
@@ -198,28 +197,28 @@ impl LeafPack for Boxes {
     }
 
     #[inline]
-    fn leaf(
-        pack: &BoxPack8,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-        _options: IntersectOptions,
-    ) -> TriangleHit8 {
-        TriangleHit8::at(aabb_leaf(ray, inv_dir, pack, t_min, t_max))
+    fn leaf(pack: &BoxPack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
+        let (ray, inv_dir) = (&query.ray, query.inv_dir);
+        TriangleHit8::at(aabb_leaf(ray, inv_dir, pack, query.t_min, t_max))
     }
 
     #[inline(always)]
-    fn slot_packet(
+    fn slot8(
         pack: &BoxPack8,
         slot: usize,
-        packet: &RayPacket,
+        query: &RayQuery8,
         t_max: F32x8,
         active: u8,
-        _options: IntersectOptions,
     ) -> TriangleHit8 {
-        let ((min, max), t_min) = (pack.corners(slot), F32x8::splat(packet.t_min));
-        TriangleHit8::at(aabb_packet(packet, min, max, t_min, t_max, active))
+        let (min, max) = pack.corners(slot);
+        TriangleHit8::at(aabb_packet(
+            query.packet,
+            min,
+            max,
+            query.t_min8(),
+            t_max,
+            active,
+        ))
     }
 }
 
@@ -235,31 +234,19 @@ impl Shapes for Boxes {
         }
     }
 
-    fn intersect(
-        &self,
-        i: usize,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<TriangleHit> {
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+        let (ray, inv_dir, t_min) = (&query.ray, query.inv_dir, query.t_min);
         aabb(ray, inv_dir, self.min.get(i), self.max.get(i), t_min, t_max).map(TriangleHit::at)
     }
 
-    fn intersect_packet(
-        &self,
-        i: usize,
-        packet: &RayPacket,
-        t_max: &[f32; 8],
-        active: u8,
-    ) -> [Option<TriangleHit>; 8] {
-        let (lo, hi) = packet_interval(packet.t_min, t_max);
-        packet_hits(aabb_packet(
-            packet,
-            self.min.get(i),
-            self.max.get(i),
-            lo,
-            hi,
+    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
+        let (min, max) = (self.min.get(i), self.max.get(i));
+        TriangleHit8::at(aabb_packet(
+            query.packet,
+            min,
+            max,
+            query.t_min8(),
+            t_max,
             active,
         ))
     }

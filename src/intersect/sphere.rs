@@ -6,8 +6,8 @@ use glam::Vec3;
 
 use super::{first_root_in, first_root_in8};
 use super::{
-    gamma, packet_hits, packet_interval, Aabb, IntersectOptions, LeafPack, Shapes, SurfacePoint,
-    TriangleHit, TriangleHit8, Vec3s,
+    gamma, Aabb, LeafPack, RayQuery, RayQuery8, Shapes, SurfacePoint, TriangleHit, TriangleHit8,
+    Vec3s,
 };
 
 use crate::ray::{Ray, RayPacket};
@@ -195,8 +195,6 @@ pub struct Spheres {
     pub centre: Vec3s,
     pub radius: Vec<f32>,
     pub material: Vec<u32>,
-    /// The form of the quadratic every test of these spheres takes.
-    pub roots: SphereRoots,
 }
 
 impl LeafPack for Spheres {
@@ -210,30 +208,29 @@ impl LeafPack for Spheres {
     }
 
     #[inline]
-    fn leaf(
-        pack: &SpherePack8,
-        ray: &Ray,
-        _inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-        options: IntersectOptions,
-    ) -> TriangleHit8 {
-        TriangleHit8::at(sphere_leaf(ray, pack, options.sphere_roots, t_min, t_max))
+    fn leaf(pack: &SpherePack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
+        let roots = query.options.sphere_roots;
+        TriangleHit8::at(sphere_leaf(&query.ray, pack, roots, query.t_min, t_max))
     }
 
     #[inline(always)]
-    fn slot_packet(
+    fn slot8(
         pack: &SpherePack8,
         slot: usize,
-        packet: &RayPacket,
+        query: &RayQuery8,
         t_max: F32x8,
         active: u8,
-        options: IntersectOptions,
     ) -> TriangleHit8 {
         let (centre, radius) = (pack.centre.lane(slot), pack.radius.to_array()[slot]);
-        let (roots, t_min) = (options.sphere_roots, F32x8::splat(packet.t_min));
+        let (roots, t_min) = (query.options.sphere_roots, query.t_min8());
         TriangleHit8::at(sphere_packet(
-            packet, centre, radius, roots, t_min, t_max, active,
+            query.packet,
+            centre,
+            radius,
+            roots,
+            t_min,
+            t_max,
+            active,
         ))
     }
 }
@@ -286,37 +283,26 @@ impl Shapes for Spheres {
     }
 
     #[inline]
-    fn intersect(
-        &self,
-        i: usize,
-        ray: &Ray,
-        _inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<TriangleHit> {
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+        let (ray, t_min) = (&query.ray, query.t_min);
         let (centre, radius) = (self.centre.get(i), self.radius[i]);
-        match self.roots {
+        match query.options.sphere_roots {
             SphereRoots::Precise => sphere(ray, centre, radius, t_min, t_max),
             SphereRoots::Textbook => sphere_textbook(ray, centre, radius, t_min, t_max),
         }
         .map(TriangleHit::at)
     }
 
-    fn intersect_packet(
-        &self,
-        i: usize,
-        packet: &RayPacket,
-        t_max: &[f32; 8],
-        active: u8,
-    ) -> [Option<TriangleHit>; 8] {
-        let (lo, hi) = packet_interval(packet.t_min, t_max);
-        packet_hits(sphere_packet(
-            packet,
-            self.centre.get(i),
-            self.radius[i],
-            self.roots,
-            lo,
-            hi,
+    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
+        let (centre, radius) = (self.centre.get(i), self.radius[i]);
+        let (roots, t_min) = (query.options.sphere_roots, query.t_min8());
+        TriangleHit8::at(sphere_packet(
+            query.packet,
+            centre,
+            radius,
+            roots,
+            t_min,
+            t_max,
             active,
         ))
     }

@@ -4,9 +4,7 @@
 
 use glam::Vec3;
 
-use super::{
-    gamma, packet_interval, Aabb, IntersectOptions, LeafPack, Shapes, SurfacePoint, Vec3s,
-};
+use super::{gamma, Aabb, LeafPack, RayQuery, RayQuery8, Shapes, SurfacePoint, Vec3s};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -75,6 +73,19 @@ impl TriangleHit8 {
             t,
             u: F32x8::ZERO,
             v: F32x8::ZERO,
+        }
+    }
+
+    /// The hit of each lane (a miss's lanes zero).
+    pub fn from_lanes(hits: [Option<TriangleHit>; 8]) -> Self {
+        let lane = |field: fn(&TriangleHit) -> f32| {
+            F32x8::from_array(hits.map(|h| h.as_ref().map_or(0.0, field)))
+        };
+        TriangleHit8 {
+            hit: Mask8::from_bitmask(crate::ray::lane_mask(|k| hits[k].is_some())),
+            t: lane(|h| h.t),
+            u: lane(|h| h.u),
+            v: lane(|h| h.v),
         }
     }
 }
@@ -241,36 +252,20 @@ impl LeafPack for Triangles {
     }
 
     #[inline]
-    fn leaf(
-        pack: &TrianglePack8,
-        ray: &Ray,
-        _inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-        _options: IntersectOptions,
-    ) -> TriangleHit8 {
-        triangle_leaf(ray, pack, t_min, t_max)
+    fn leaf(pack: &TrianglePack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
+        triangle_leaf(&query.ray, pack, query.t_min, t_max)
     }
 
     #[inline(always)]
-    fn slot_packet(
+    fn slot8(
         pack: &TrianglePack8,
         slot: usize,
-        packet: &RayPacket,
+        query: &RayQuery8,
         t_max: F32x8,
         active: u8,
-        _options: IntersectOptions,
     ) -> TriangleHit8 {
         let (p0, e1, e2) = (pack.p0.lane(slot), pack.e1.lane(slot), pack.e2.lane(slot));
-        triangle_packet(
-            packet,
-            p0,
-            e1,
-            e2,
-            F32x8::splat(packet.t_min),
-            t_max,
-            active,
-        )
+        triangle_packet(query.packet, p0, e1, e2, query.t_min8(), t_max, active)
     }
 }
 
@@ -288,54 +283,14 @@ impl Shapes for Triangles {
     }
 
     #[inline]
-    fn intersect(
-        &self,
-        i: usize,
-        ray: &Ray,
-        _inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<TriangleHit> {
-        triangle(
-            ray,
-            self.p0.get(i),
-            self.e1.get(i),
-            self.e2.get(i),
-            t_min,
-            t_max,
-        )
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+        let (p0, e1, e2) = (self.p0.get(i), self.e1.get(i), self.e2.get(i));
+        triangle(&query.ray, p0, e1, e2, query.t_min, t_max)
     }
 
-    fn intersect_packet(
-        &self,
-        i: usize,
-        packet: &RayPacket,
-        t_max: &[f32; 8],
-        active: u8,
-    ) -> [Option<TriangleHit>; 8] {
-        let (lo, hi) = packet_interval(packet.t_min, t_max);
-        let h = triangle_packet(
-            packet,
-            self.p0.get(i),
-            self.e1.get(i),
-            self.e2.get(i),
-            lo,
-            hi,
-            active,
-        );
-        let (hit, t, u, v) = (
-            h.hit.bitmask(),
-            h.t.to_array(),
-            h.u.to_array(),
-            h.v.to_array(),
-        );
-        std::array::from_fn(|k| {
-            (hit & (1 << k) != 0).then(|| TriangleHit {
-                t: t[k],
-                u: u[k],
-                v: v[k],
-            })
-        })
+    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
+        let (p0, e1, e2) = (self.p0.get(i), self.e1.get(i), self.e2.get(i));
+        triangle_packet(query.packet, p0, e1, e2, query.t_min8(), t_max, active)
     }
 
     /// The geometric normal of P3F.md section 2 (triangles have no inside), or for smooth

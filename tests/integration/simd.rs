@@ -6,8 +6,9 @@
 
 use glam::Vec3;
 use p3trace::intersect::{
-    self, BoxPack8, BoxRay, BoxRay8, Boxes, IntersectOptions, Intervals8, LeafPack, SpherePack8,
-    SphereRoots, Spheres, TriangleHit, TriangleHit8, TrianglePack8, Triangles,
+    self, BoxPack8, BoxRay, BoxRay8, Boxes, IntersectOptions, Intervals8, LeafPack, RayQuery,
+    RayQuery8, SpherePack8, SphereRoots, Spheres, TriangleHit, TriangleHit8, TrianglePack8,
+    Triangles,
 };
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::simd::{F32x8, Mask8};
@@ -197,7 +198,8 @@ const CASES: u32 = 2000;
 
 /// A packed kind's [`LeafPack`] against its scalar test (`Shapes::intersect`), bit for
 /// bit: the leaf kernel, one ray within `(t_min, t_max)` against the pack of all of
-/// `storage` (padding slots miss), and each slot against the lanes of `p` from `t_min`.
+/// `storage` (padding slots miss), and each slot against the lanes of `p` from `t_min`,
+/// as the pack holds it and as `storage` does (`Shapes::intersect8`).
 fn pack_equals_scalar<K: LeafPack>(
     what: &str,
     storage: &K,
@@ -208,22 +210,30 @@ fn pack_equals_scalar<K: LeafPack>(
 ) {
     let n = storage.len();
     let pack = storage.pack(0..n);
-    let inv_dir = ray.dir.recip();
-    let hits = K::leaf(&pack, ray, inv_dir, t_min, t_max, options);
+    let query = RayQuery::new(ray, t_min, options);
+    let hits = K::leaf(&pack, &query, t_max);
     for slot in 0..8 {
         let scalar = (slot < n)
-            .then(|| storage.intersect(slot, ray, inv_dir, t_min, t_max))
+            .then(|| storage.intersect(slot, &query, t_max))
             .flatten();
         same_hit(&format!("{what} leaf"), slot, scalar, hits);
     }
     let (rays, _, hi, active) = p.soa();
     let rays = RayPacket { t_min, ..rays };
+    let query = RayQuery8 {
+        packet: &rays,
+        options,
+    };
     for slot in 0..n {
-        let hits = K::slot_packet(&pack, slot, &rays, hi, active, options);
+        let in_pack = K::slot8(&pack, slot, &query, hi, active);
+        let in_storage = storage.intersect8(slot, &query, hi, active);
         for (k, ray) in p.rays.iter().enumerate() {
-            let scalar = storage.intersect(slot, ray, ray.dir.recip(), t_min, p.t_max[k]);
-            let what = format!("{what} slot {slot}");
-            same_hit(&what, k, scalar.filter(|_| p.active(k)), hits);
+            let lane = RayQuery::new(ray, t_min, options);
+            let scalar = storage
+                .intersect(slot, &lane, p.t_max[k])
+                .filter(|_| p.active(k));
+            same_hit(&format!("{what} slot {slot}"), k, scalar, in_pack);
+            same_hit(&format!("{what} {slot}, intersect8"), k, scalar, in_storage);
         }
     }
 }
@@ -403,7 +413,6 @@ proptest! {
             storage.radius.push(r);
             storage.material.push(0);
         }
-        storage.roots = roots;
         let options = IntersectOptions { sphere_roots: roots };
         pack_equals_scalar("sphere pack", &storage, &ray, limits, &p, options);
     }

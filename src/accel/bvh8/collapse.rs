@@ -13,7 +13,7 @@ use super::leaves::{count_index, Leaves, PackCounts};
 use super::node::{leaf_ref, Node8, MAX_LEAF_PRIMS, MAX_PRIMS, RUN, WIDTH};
 use super::Bvh8;
 use crate::accel::bvh2::{Bvh2, Node};
-use crate::intersect::{BoxPack8, IntersectOptions};
+use crate::intersect::BoxPack8;
 use crate::prim::{PrimId, PrimKind};
 use crate::scene::Geometry;
 
@@ -56,9 +56,6 @@ impl Bvh8 {
             nodes: Vec::with_capacity(size.nodes),
             prims: Vec::new(),
             leaves: Leaves::with_capacity(&size.packs),
-            options: IntersectOptions {
-                sphere_roots: geometry.spheres.roots,
-            },
             depth: 0,
             build,
             binary: stats,

@@ -4,14 +4,12 @@
 //! its dispatch are generated from the list ([`packed_kinds!`]); what is done with a pack
 //! is written once, over [`LeafPack`], so that the tree names no kind.
 
-use glam::Vec3;
-
 use super::node::{leaf_parts, leaf_ref, pack_code, ChildRef};
 use super::packet::lanes_of;
 use crate::accel::hit::{for_lanes, ClosestHit};
-use crate::intersect::{IntersectOptions, LeafPack};
+use crate::intersect::{LeafPack, RayQuery, RayQuery8};
 use crate::prim::{packed_kinds, PrimId, PrimKind};
-use crate::ray::{Hit, Ray, RayPacket};
+use crate::ray::Hit;
 use crate::scene::Geometry;
 use crate::simd::F32x8;
 
@@ -41,19 +39,10 @@ impl<K: LeafPack> Packs<K> {
         self.packs.len() - 1
     }
 
-    /// Tests pack `index` against the ray, keeping the winner in `closest`.
+    /// Tests pack `index` against `query`, keeping the winner in `closest`.
     #[inline(always)]
-    fn closest(
-        &self,
-        index: usize,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        options: IntersectOptions,
-        closest: &mut ClosestHit,
-    ) {
-        let pack = &self.packs[index];
-        let hits = K::leaf(pack, ray, inv_dir, t_min, closest.bound(), options);
+    fn closest(&self, index: usize, query: &RayQuery, closest: &mut ClosestHit) {
+        let hits = K::leaf(&self.packs[index], query, closest.bound());
         let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
         let ids = &self.ids[index];
         for_lanes(hits.hit.bitmask(), |k| {
@@ -66,20 +55,10 @@ impl<K: LeafPack> Packs<K> {
         });
     }
 
-    /// Whether a primitive of pack `index` blocks the ray within `(t_min, t_max)`.
+    /// Whether a primitive of pack `index` blocks `query` within `(t_min, t_max)`.
     #[inline(always)]
-    fn blocks(
-        &self,
-        index: usize,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-        options: IntersectOptions,
-    ) -> bool {
-        K::leaf(&self.packs[index], ray, inv_dir, t_min, t_max, options)
-            .hit
-            .any()
+    fn blocks(&self, index: usize, query: &RayQuery, t_max: f32) -> bool {
+        K::leaf(&self.packs[index], query, t_max).hit.any()
     }
 
     /// The primitives of pack `index`, which holds `count`, against the lanes `lanes`
@@ -93,15 +72,14 @@ impl<K: LeafPack> Packs<K> {
     fn closest_packet(
         &self,
         (index, count): (usize, usize),
-        packet: &RayPacket,
+        query: &RayQuery8,
         lanes: u8,
-        options: IntersectOptions,
         closest: &mut [ClosestHit; 8],
     ) {
         let (pack, ids) = (&self.packs[index], &self.ids[index]);
         let mut bound = lanes_of(closest, ClosestHit::bound);
         for (slot, &prim) in ids.iter().enumerate().take(count) {
-            let hits = K::slot_packet(pack, slot, packet, bound, lanes, options);
+            let hits = K::slot8(pack, slot, query, bound, lanes);
             let hit = hits.hit.bitmask();
             if hit != 0 {
                 let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
@@ -121,19 +99,13 @@ impl<K: LeafPack> Packs<K> {
     /// The lanes of `lanes` that a primitive of pack `index`, which holds `count`,
     /// blocks within the packet's interval, one primitive against every lane at a time.
     #[inline(never)]
-    fn blocks_packet(
-        &self,
-        (index, count): (usize, usize),
-        packet: &RayPacket,
-        lanes: u8,
-        options: IntersectOptions,
-    ) -> u8 {
+    fn blocks_packet(&self, (index, count): (usize, usize), query: &RayQuery8, lanes: u8) -> u8 {
         let pack = &self.packs[index];
-        let t_max = F32x8::from_array(packet.t_max);
+        let t_max = F32x8::from_array(query.packet.t_max);
         let mut blocked = 0;
         for slot in 0..count {
             let open = lanes & !blocked;
-            let hits = K::slot_packet(pack, slot, packet, t_max, open, options);
+            let hits = K::slot8(pack, slot, query, t_max, open);
             blocked |= hits.hit.bitmask();
             if blocked == lanes {
                 break;
@@ -184,68 +156,51 @@ macro_rules! define_leaves {
                 }
             }
 
-            /// Tests the pack of the leaf `child` against the ray, keeping the winner in
+            /// Tests the pack of the leaf `child` against `query`, keeping the winner in
             /// `closest`; `false` when `child` holds no pack (a run of primitives).
             #[inline(always)]
-            pub fn closest(
-                &self,
-                child: ChildRef,
-                ray: &Ray,
-                inv_dir: Vec3,
-                t_min: f32,
-                options: IntersectOptions,
-                closest: &mut ClosestHit,
-            ) -> bool {
+            pub fn closest(&self, child: ChildRef, query: &RayQuery, closest: &mut ClosestHit) -> bool {
                 let (code, _, index) = leaf_parts(child);
                 match code {
                     $(c if c == const { pack_code(PrimKind::$kind) } => {
-                        self.$field.closest(index, ray, inv_dir, t_min, options, closest);
+                        self.$field.closest(index, query, closest);
                         true
                     })*
                     _ => false,
                 }
             }
 
-            /// Whether a primitive of the pack of the leaf `child` blocks the ray within
+            /// Whether a primitive of the pack of the leaf `child` blocks `query` within
             /// `(t_min, t_max)`; `None` when `child` holds no pack.
             #[inline(always)]
-            pub fn blocks(
-                &self,
-                child: ChildRef,
-                ray: &Ray,
-                inv_dir: Vec3,
-                t_min: f32,
-                t_max: f32,
-                options: IntersectOptions,
-            ) -> Option<bool> {
+            pub fn blocks(&self, child: ChildRef, query: &RayQuery, t_max: f32) -> Option<bool> {
                 let (code, _, index) = leaf_parts(child);
                 match code {
                     $(c if c == const { pack_code(PrimKind::$kind) } => {
-                        Some(self.$field.blocks(index, ray, inv_dir, t_min, t_max, options))
+                        Some(self.$field.blocks(index, query, t_max))
                     })*
                     _ => None,
                 }
             }
 
             /// [`Packs::closest_packet`] for the leaf `child` and the lanes `lanes` of
-            /// `packet` when `child` is a pack of fewer primitives than `lanes` has
-            /// lanes: then testing each primitive against all lanes makes fewer 8-lane
-            /// tests than testing each lane against every slot. `false` otherwise, the
-            /// lanes left untested.
+            /// `query`'s packet when `child` is a pack of fewer primitives than `lanes`
+            /// has lanes: then testing each primitive against all lanes makes fewer
+            /// 8-lane tests than testing each lane against every slot. `false`
+            /// otherwise, the lanes left untested.
             #[inline(always)]
             pub fn closest_packet(
                 &self,
                 child: ChildRef,
-                packet: &RayPacket,
+                query: &RayQuery8,
                 lanes: u8,
-                options: IntersectOptions,
                 closest: &mut [ClosestHit; 8],
             ) -> bool {
                 let (code, count, index) = leaf_parts(child);
                 let fewer = count < lanes.count_ones() as usize;
                 match code {
                     $(c if fewer && c == const { pack_code(PrimKind::$kind) } => {
-                        self.$field.closest_packet((index, count), packet, lanes, options, closest);
+                        self.$field.closest_packet((index, count), query, lanes, closest);
                         true
                     })*
                     _ => false,
@@ -253,21 +208,16 @@ macro_rules! define_leaves {
             }
 
             /// [`Packs::blocks_packet`] for the leaf `child` and the lanes `lanes` of
-            /// `packet` when `child` is a pack of fewer primitives than `lanes` has lanes
-            /// (as [`Leaves::closest_packet`]); `None` otherwise, the lanes left untested.
+            /// `query`'s packet when `child` is a pack of fewer primitives than `lanes`
+            /// has lanes (as [`Leaves::closest_packet`]); `None` otherwise, the lanes left
+            /// untested.
             #[inline(always)]
-            pub fn blocks_packet(
-                &self,
-                child: ChildRef,
-                packet: &RayPacket,
-                lanes: u8,
-                options: IntersectOptions,
-            ) -> Option<u8> {
+            pub fn blocks_packet(&self, child: ChildRef, query: &RayQuery8, lanes: u8) -> Option<u8> {
                 let (code, count, index) = leaf_parts(child);
                 let fewer = count < lanes.count_ones() as usize;
                 match code {
                     $(c if fewer && c == const { pack_code(PrimKind::$kind) } => {
-                        Some(self.$field.blocks_packet((index, count), packet, lanes, options))
+                        Some(self.$field.blocks_packet((index, count), query, lanes))
                     })*
                     _ => None,
                 }

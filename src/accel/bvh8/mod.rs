@@ -18,7 +18,6 @@ mod packet;
 mod traverse;
 
 use super::bvh2::{Bvh2Stats, BvhBuild};
-use crate::intersect::IntersectOptions;
 use crate::plural::count;
 use crate::prim::PrimId;
 use leaves::Leaves;
@@ -30,8 +29,6 @@ pub struct Bvh8 {
     nodes: Vec<Node8>,
     prims: Vec<PrimId>,
     leaves: Leaves,
-    /// How the packs are tested: the scene's spheres' form of the quadratic.
-    options: IntersectOptions,
     /// The longest path from the root to a leaf, in nodes (statistics).
     depth: usize,
     build: BvhBuild,

@@ -10,8 +10,7 @@ use super::node::{ChildRef, Node8, LEAF};
 use super::{Bvh8, STACK_SIZE};
 use crate::accel::hit::{for_lanes, ClosestHit};
 use crate::accel::stack::Stack;
-use crate::intersect::{beyond8, BoxRay8, RayRange};
-use crate::ray::RayPacket;
+use crate::intersect::{beyond8, BoxRay8, RayQuery8, RayRange};
 use crate::scene::Geometry;
 use crate::simd::{F32x8, Mask8};
 
@@ -19,22 +18,23 @@ use crate::simd::{F32x8, Mask8};
 const SINGLE_RAY_LANES: u32 = 2;
 
 impl Bvh8 {
-    /// The closest hits of the active lanes of `packet`, traced together: each node's children are tested against all the packet's rays at once,
-    /// visited nearest first (by the nearest lane's entry) with their lanes and that
+    /// The closest hits of the active lanes of `query`'s packet, traced together: each
+    /// node's children are tested against all the packet's rays at once, visited nearest
+    /// first (by the nearest lane's entry) with their lanes and that
     /// entry on the stack. An entry is skipped when it lies beyond every lane's closest
     /// hit; a subtree left with few lanes is finished one ray at a time. Each lane's
     /// answer is the one [`Bvh8::closest`] gives.
     pub fn closest_packet(
         &self,
         geometry: &Geometry,
-        packet: &RayPacket,
-        closest: &mut [ClosestHit; 8],
+        query: &RayQuery8,
+        hits: &mut [ClosestHit; 8],
     ) {
-        let (rays, active, t_min) = (packet.rays, packet.active, packet.t_min);
+        let (closest, packet) = (hits, query.packet);
+        let (active, t_min) = (packet.active, packet.t_min);
         if self.nodes.is_empty() || active == 0 {
             return;
         }
-        let inv_dir = packet.inv_dir_lanes();
         let box_rays = BoxRay8::new(packet);
         let lanes_t_min = F32x8::splat(t_min);
         let mut limit = lanes_of(closest, ClosestHit::limit);
@@ -50,34 +50,17 @@ impl Bvh8 {
                 continue;
             }
             let leaf = child & LEAF != 0;
-            if leaf
-                && self
-                    .leaves
-                    .closest_packet(child, packet, lanes, self.options, closest)
-            {
+            if leaf && self.leaves.closest_packet(child, query, lanes, closest) {
                 limit = lanes_of(closest, ClosestHit::limit);
                 continue;
             }
             if leaf || lanes.count_ones() <= SINGLE_RAY_LANES {
                 for_lanes(lanes, |k| {
+                    let lane = query.lane(k);
                     if leaf {
-                        self.closest_in_leaf(
-                            geometry,
-                            child,
-                            &rays[k],
-                            inv_dir[k],
-                            t_min,
-                            &mut closest[k],
-                        );
+                        self.closest_in_leaf(geometry, child, &lane, &mut closest[k]);
                     } else {
-                        self.closest_from(
-                            child,
-                            geometry,
-                            &rays[k],
-                            inv_dir[k],
-                            t_min,
-                            &mut closest[k],
-                        );
+                        self.closest_from(child, geometry, &lane, &mut closest[k]);
                     }
                 });
                 limit = lanes_of(closest, ClosestHit::limit);
@@ -102,15 +85,14 @@ impl Bvh8 {
         }
     }
 
-    /// The active lanes of `packet` whose ray is blocked within its interval, as a bit
-    /// mask, the rays traced together as in [`Bvh8::closest_packet`].
-    pub fn occluded_packet(&self, geometry: &Geometry, packet: &RayPacket) -> u8 {
-        let (rays, active) = (packet.rays, packet.active);
-        let (t_min, t_max) = (packet.t_min, &packet.t_max);
+    /// The active lanes of `query`'s packet whose ray is blocked within its interval, as
+    /// a bit mask, the rays traced together as in [`Bvh8::closest_packet`].
+    pub fn occluded_packet(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
+        let packet = query.packet;
+        let (active, t_min, t_max) = (packet.active, packet.t_min, &packet.t_max);
         if self.nodes.is_empty() || active == 0 {
             return 0;
         }
-        let inv_dir = packet.inv_dir_lanes();
         let box_rays = BoxRay8::new(packet);
         let (lanes_t_min, lanes_t_max) = (F32x8::splat(t_min), F32x8::from_array(*t_max));
         let range = box_rays.range(active);
@@ -125,8 +107,7 @@ impl Bvh8 {
             }
             let leaf = child & LEAF != 0;
             let in_pack = if leaf {
-                let options = self.options;
-                self.leaves.blocks_packet(child, packet, lanes, options)
+                self.leaves.blocks_packet(child, query, lanes)
             } else {
                 None
             };
@@ -139,10 +120,11 @@ impl Bvh8 {
             }
             if leaf || lanes.count_ones() <= SINGLE_RAY_LANES {
                 for_lanes(lanes, |k| {
+                    let lane = query.lane(k);
                     let hit = if leaf {
-                        self.blocks(geometry, child, &rays[k], inv_dir[k], t_min, t_max[k])
+                        self.blocks(geometry, child, &lane, t_max[k])
                     } else {
-                        self.occluded_from(child, geometry, &rays[k], inv_dir[k], t_min, t_max[k])
+                        self.occluded_from(child, geometry, &lane, t_max[k])
                     };
                     if hit {
                         blocked |= 1 << k;

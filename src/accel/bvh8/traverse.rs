@@ -1,14 +1,11 @@
 //! Single-ray traversal of the 8-wide tree: one ray against a node's eight boxes at
 //! once, nearest child first; a pack leaf's primitives tested eight at a time.
 
-use glam::Vec3;
-
 use super::node::{leaf_parts, ChildRef, LEAF};
 use super::{Bvh8, STACK_SIZE};
 use crate::accel::hit::{for_lanes, ClosestHit};
 use crate::accel::stack::Stack;
-use crate::intersect::{beyond, BoxRay};
-use crate::ray::Ray;
+use crate::intersect::{beyond, BoxRay, RayQuery};
 use crate::scene::Geometry;
 
 impl Bvh8 {
@@ -18,58 +15,39 @@ impl Bvh8 {
         &self,
         geometry: &Geometry,
         child: ChildRef,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
+        query: &RayQuery,
         closest: &mut ClosestHit,
     ) {
-        let options = self.options;
-        if !self
-            .leaves
-            .closest(child, ray, inv_dir, t_min, options, closest)
-        {
+        if !self.leaves.closest(child, query, closest) {
             let (_, count, index) = leaf_parts(child);
             for &prim in &self.prims[index..index + count] {
-                closest.test(geometry, prim, ray, inv_dir, t_min);
+                closest.test(geometry, prim, query);
             }
         }
     }
 
-    /// Whether a primitive of leaf `child` blocks the ray within `(t_min, t_max)`.
+    /// Whether a primitive of leaf `child` blocks `query` within `(t_min, t_max)`.
     #[inline]
     pub(super) fn blocks(
         &self,
         geometry: &Geometry,
         child: ChildRef,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
+        query: &RayQuery,
         t_max: f32,
     ) -> bool {
-        let options = self.options;
-        let in_pack = self
-            .leaves
-            .blocks(child, ray, inv_dir, t_min, t_max, options);
+        let in_pack = self.leaves.blocks(child, query, t_max);
         in_pack.unwrap_or_else(|| {
             let (_, count, index) = leaf_parts(child);
-            self.prims[index..index + count].iter().any(|&prim| {
-                geometry
-                    .intersect(prim, ray, inv_dir, t_min, t_max)
-                    .is_some()
-            })
+            let prims = &self.prims[index..index + count];
+            prims
+                .iter()
+                .any(|&prim| geometry.intersect(prim, query, t_max).is_some())
         })
     }
 
-    pub fn closest(
-        &self,
-        geometry: &Geometry,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        closest: &mut ClosestHit,
-    ) {
+    pub fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
         if !self.nodes.is_empty() {
-            self.closest_from(0, geometry, ray, inv_dir, t_min, closest);
+            self.closest_from(0, geometry, query, closest);
         }
     }
 
@@ -79,12 +57,10 @@ impl Bvh8 {
         &self,
         start: ChildRef,
         geometry: &Geometry,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
+        query: &RayQuery,
         closest: &mut ClosestHit,
     ) {
-        let box_ray = BoxRay::new(ray.origin, inv_dir);
+        let (t_min, box_ray) = (query.t_min, BoxRay::new(query.ray.origin, query.inv_dir));
         let mut stack = Stack::<(ChildRef, f32), STACK_SIZE>::new();
         stack.push((start, t_min));
         while let Some((child, t_entry)) = stack.pop() {
@@ -93,7 +69,7 @@ impl Bvh8 {
                 continue;
             }
             if child & LEAF != 0 {
-                self.closest_in_leaf(geometry, child, ray, inv_dir, t_min, closest);
+                self.closest_in_leaf(geometry, child, query, closest);
                 continue;
             }
             let node = &self.nodes[child as usize];
@@ -106,15 +82,8 @@ impl Bvh8 {
         }
     }
 
-    pub fn occluded(
-        &self,
-        geometry: &Geometry,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> bool {
-        !self.nodes.is_empty() && self.occluded_from(0, geometry, ray, inv_dir, t_min, t_max)
+    pub fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
+        !self.nodes.is_empty() && self.occluded_from(0, geometry, query, t_max)
     }
 
     /// [`Bvh8::occluded`] over the subtree under `start`.
@@ -123,17 +92,15 @@ impl Bvh8 {
         &self,
         start: ChildRef,
         geometry: &Geometry,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
+        query: &RayQuery,
         t_max: f32,
     ) -> bool {
-        let box_ray = BoxRay::new(ray.origin, inv_dir);
+        let (t_min, box_ray) = (query.t_min, BoxRay::new(query.ray.origin, query.inv_dir));
         let mut stack = Stack::<ChildRef, STACK_SIZE>::new();
         stack.push(start);
         while let Some(child) = stack.pop() {
             if child & LEAF != 0 {
-                if self.blocks(geometry, child, ray, inv_dir, t_min, t_max) {
+                if self.blocks(geometry, child, query, t_max) {
                     return true;
                 }
                 continue;
