@@ -4,14 +4,16 @@
 
 use std::time::{Duration, Instant};
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::accel::Tracer;
 use crate::plural::count;
 use crate::prim::PrimKind;
 use crate::ray::{lane_mask, Ray, RayPacket};
-use crate::scene::{Light, Scene};
+use crate::render::light::{emitters, Receiver};
+use crate::render::sampler::{Sample, SampleGrid, SampleRng};
+use crate::scene::Scene;
 
 /// The protocol's image width; the height follows the scene's aspect ratio.
 pub const WIDTH: u32 = 1024;
@@ -141,14 +143,14 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
             primary.rays.push(ray);
         }
     }
-    let lights: Vec<DVec3> = scene
-        .lights
-        .iter()
-        .map(|l| match *l {
-            Light::Point { position, .. } => position.as_dvec3(),
-            Light::Area { centre, .. } => centre.as_dvec3(),
-        })
-        .collect();
+    // Each light as one point, its centre (an area light's grid of one cell): points
+    // draw no random number, so one sample serves every hit.
+    let lights = emitters(&scene.lights, c.up, None, SampleGrid::square(1), false);
+    let sample = Sample {
+        rng: SampleRng::new(0, 0, 0),
+        cell: [0, 0],
+        grid: SampleGrid::square(1),
+    };
     let mut shadow = RaySet {
         name: "shadow",
         rays: Vec::new(),
@@ -193,15 +195,18 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
         };
         let facing = if normal.dot(d) < 0.0 { normal } else { -normal };
         let origin = p + facing * OFFSET;
-        for &light in &lights {
-            if facing.dot(light - p) <= 0.0 {
-                continue;
+        let receiver = Receiver {
+            point: p,
+            normal: facing,
+            origin,
+        };
+        for (index, light) in lights.iter().enumerate() {
+            if let Some(light) = light.sample(index, &receiver, &sample) {
+                shadow
+                    .rays
+                    .push(Ray::new(origin.as_vec3(), light.dir.as_vec3()));
+                shadow.t_max.push(light.distance);
             }
-            let to_light = light - origin;
-            shadow
-                .rays
-                .push(Ray::new(origin.as_vec3(), to_light.normalize().as_vec3()));
-            shadow.t_max.push(to_light.length() as f32);
         }
         let mirror = d - facing * (2.0 * d.dot(facing));
         reflection
@@ -553,6 +558,21 @@ mod tests {
         // A mirror ray off a sphere seen from outside points away from it.
         for r in &reflection.rays {
             assert!(r.dir.dot(r.origin) > -1e-3);
+        }
+    }
+
+    /// An area light sends each hit one shadow ray, to its centre.
+    #[test]
+    fn shadow_rays_end_at_the_centre_of_an_area_light() {
+        let text = SCENE.replace("l 0 -5 -5\n", "al 0 0 6 0 0 0 4 4 1 1 1\n");
+        let scene = parse_text(&text).unwrap();
+        let tracer = Tracer::new(&scene.geometry, &AccelOptions::brute_force());
+        let [_, shadow, reflection] = ray_sets(&scene, &tracer);
+        assert!(shadow.rays.len() > reflection.rays.len());
+        let ends = [Vec3::new(0.0, 5.0, 5.0), Vec3::new(0.0, 0.0, 6.0)];
+        for (ray, &t_max) in shadow.rays.iter().zip(&shadow.t_max) {
+            let end = ray.at(t_max);
+            assert!(ends.iter().any(|l| end.distance(*l) < 1e-3), "{end}");
         }
     }
 

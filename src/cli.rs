@@ -1,13 +1,20 @@
-//! The command line: clap definitions and the plain option structs they become.
+//! The command line: clap definitions and the plain option structs they become. An option
+//! that picks one of a library enum's values holds that enum itself, parsed by [`one_of`]
+//! from the names the command line gives its values.
 
 use std::ops::RangeInclusive;
 use std::path::PathBuf;
 
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use p3trace::accel::{AccelKind, AccelOptions, BvhBuild, BvhWidth};
+use p3trace::generate::skybox::Up;
 use p3trace::generate::{mountain, sphereflake};
 use p3trace::limits::MAX_SPP_SIDE;
 use p3trace::render::light::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
 use p3trace::render::region::TileIndex;
+use p3trace::render::shade::Profile;
+use p3trace::render::RenderMode;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -111,8 +118,8 @@ pub enum GenCommand {
     /// The procedural skybox: six PNG faces (sky gradient, sun, sea) for `env DIR`.
     Skybox {
         /// The world axis that points up in the scenes that will use it.
-        #[arg(long, value_enum, default_value_t = UpAxis::Z)]
-        up: UpAxis,
+        #[arg(long, value_parser = one_of(UP_AXES), default_value = "z")]
+        up: Up,
         /// Texels along each side of a face.
         #[arg(long, value_name = "N", default_value_t = 256, allow_negative_numbers = true,
               value_parser = whole::<u32>(2..=8192))]
@@ -166,12 +173,6 @@ impl DragonResolution {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum UpAxis {
-    Y,
-    Z,
-}
-
 /// The most samples per pixel: the file's largest grid.
 const MAX_SPP: u32 = MAX_SPP_SIDE * MAX_SPP_SIDE;
 
@@ -191,8 +192,9 @@ pub struct InfoArgs {
     /// Build the structure as `render --profile PROFILE` does: standard stores positions
     /// relative to the camera, course in the file's coordinates, and the binned SAH build
     /// can split the two a little differently.
-    #[arg(long, value_enum, value_name = "PROFILE", default_value_t = ProfileChoice::Standard)]
-    pub profile: ProfileChoice,
+    #[arg(long, value_name = "PROFILE", value_parser = one_of(PROFILES),
+          default_value = "standard")]
+    pub profile: Profile,
     #[command(flatten)]
     pub accel: AccelArgs,
 }
@@ -246,8 +248,9 @@ pub struct RenderArgs {
     /// renderer's own, which reproduces its reference images: the background seen by a
     /// ray of depth d that misses is dimmed by min(1, 1 / (0.7 (d - 1))), skybox
     /// included, and the maximum depth is 8).
-    #[arg(long, value_enum, value_name = "PROFILE", default_value_t = ProfileChoice::Standard)]
-    pub profile: ProfileChoice,
+    #[arg(long, value_name = "PROFILE", value_parser = one_of(PROFILES),
+          default_value = "standard")]
+    pub profile: Profile,
     /// Use Schlick's approximation instead of the exact Fresnel equations.
     #[arg(long)]
     pub schlick: bool,
@@ -301,8 +304,8 @@ pub struct RenderArgs {
     /// How rays travel: stream (a tile's rays depth by depth, each depth's rays and shadow
     /// rays eight at a time) or scalar (one at a time, the reference). Both give the same
     /// image byte for byte.
-    #[arg(long, value_enum, value_name = "MODE", default_value_t = ModeChoice::Stream)]
-    pub mode: ModeChoice,
+    #[arg(long, value_name = "MODE", value_parser = one_of(MODES), default_value = "stream")]
+    pub mode: RenderMode,
     /// No progress and no closing statistics line (warnings still go to stderr). Without
     /// it, progress shows as a bar on a terminal, and elsewhere (a log, CI) as a plain
     /// line at every tenth of the tiles and at least every 10 s.
@@ -377,13 +380,13 @@ pub struct AccelArgs {
     pub accel: AccelChoice,
     /// How the BVH is built: sah (binned surface area heuristic, fast) or midpoint (the
     /// course report's: longest-axis midpoint, leaves of at most two objects).
-    #[arg(long, value_enum, value_name = "BUILD", default_value_t = BvhChoice::Sah)]
-    pub bvh: BvhChoice,
+    #[arg(long, value_name = "BUILD", value_parser = one_of(BVH_BUILDS), default_value = "sah")]
+    pub bvh: BvhBuild,
     /// Children per BVH node during traversal: 2 (the tree as built) or 8 (collapsed to
     /// 8-wide nodes whose boxes one ray tests together). Default: 8 for sah, 2 for
     /// midpoint (the report's binary traversal).
     #[arg(long, value_name = "N", value_parser = parse_bvh_width, allow_negative_numbers = true)]
-    pub bvh_width: Option<u32>,
+    pub bvh_width: Option<BvhWidth>,
     /// The grid's density m: floor(m * w * (N / V)^(1/3)) + 1 cells along an axis of
     /// width w, for N objects in a box of volume V.
     #[arg(long, value_name = "M", default_value_t = 2.0, value_parser = parse_density,
@@ -394,18 +397,53 @@ pub struct AccelArgs {
     pub mailbox: bool,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum ProfileChoice {
-    Standard,
-    Course,
+impl AccelArgs {
+    /// The structure these flags ask for, given the one the scene file asks for (by
+    /// default the fastest, whatever the file says), with its build settings.
+    pub fn options(&self, file: Option<AccelKind>) -> AccelOptions {
+        let kind = match self.accel {
+            AccelChoice::Auto => AccelKind::Bvh,
+            AccelChoice::File => file.unwrap_or(AccelKind::Bvh),
+            AccelChoice::None => AccelKind::None,
+            AccelChoice::Grid => AccelKind::Grid,
+            AccelChoice::Bvh => AccelKind::Bvh,
+        };
+        AccelOptions {
+            kind,
+            bvh: self.bvh,
+            bvh_width: self.bvh_width,
+            grid_density: self.grid_density,
+            mailbox: self.mailbox,
+            ..AccelOptions::default()
+        }
+    }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum ModeChoice {
-    Stream,
-    Scalar,
+// The values of `--profile`, `--mode`, `--bvh` and `gen skybox --up` by name, in the
+// order help lists them.
+const PROFILES: &[(&str, Profile)] =
+    &[("standard", Profile::Standard), ("course", Profile::Course)];
+const MODES: &[(&str, RenderMode)] = &[
+    ("stream", RenderMode::Stream),
+    ("scalar", RenderMode::Scalar),
+];
+const BVH_BUILDS: &[(&str, BvhBuild)] = &[("sah", BvhBuild::Sah), ("midpoint", BvhBuild::Midpoint)];
+const UP_AXES: &[(&str, Up)] = &[("y", Up::Y), ("z", Up::Z)];
+
+/// Parses one of `values` by its name; help, the man page and the completions list the
+/// names as they list a [`ValueEnum`]'s. The library's enums derive no `ValueEnum`, which
+/// would make the library depend on clap.
+fn one_of<T: Copy + Send + Sync + 'static>(
+    values: &'static [(&'static str, T)],
+) -> impl TypedValueParser<Value = T> {
+    PossibleValuesParser::new(values.iter().map(|&(name, _)| name)).map(|chosen| {
+        let named = values.iter().find(|&&(name, _)| name == chosen);
+        named.expect("the parser takes only these names").1
+    })
 }
 
+/// `--accel`: a structure, or which one to take. `auto` and `file` are the command line's
+/// choices, not structures of the library's, and each value has its own help.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum AccelChoice {
     /// The fastest structure, whatever the file says (today the BVH).
@@ -420,16 +458,10 @@ pub enum AccelChoice {
     Bvh,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum BvhChoice {
-    Sah,
-    Midpoint,
-}
-
-fn parse_bvh_width(text: &str) -> Result<u32, String> {
+fn parse_bvh_width(text: &str) -> Result<BvhWidth, String> {
     match text {
-        "2" => Ok(2),
-        "8" => Ok(8),
+        "2" => Ok(BvhWidth::Two),
+        "8" => Ok(BvhWidth::Eight),
         _ => Err(format!("'{text}': the BVH width is 2 or 8")),
     }
 }
@@ -635,6 +667,43 @@ mod tests {
         assert_eq!(parse_pixel_bounds("0,64,8,16"), Ok([0, 64, 8, 16]));
         assert!(parse_pixel_bounds("0,0,8,16").is_err());
         assert!(parse_pixel_bounds("-1,3,8,16").is_err());
+    }
+
+    /// Each name gives its value of the library's enum, and the defaults are the help's.
+    #[test]
+    fn value_names_give_the_library_values() {
+        let render = |flags: &[&str]| {
+            let line = ["p3trace", "render", "x.p3f"].iter().chain(flags);
+            match Cli::try_parse_from(line).unwrap().command {
+                Command::Render(args) => args,
+                _ => unreachable!("a render command"),
+            }
+        };
+        let defaults = render(&[]);
+        assert_eq!(defaults.profile, Profile::Standard);
+        assert_eq!(defaults.mode, RenderMode::Stream);
+        assert_eq!(defaults.accel.bvh, BvhBuild::Sah);
+        assert_eq!(defaults.accel.bvh_width, None);
+        let chosen = render(&[
+            "--profile=course",
+            "--mode=scalar",
+            "--bvh=midpoint",
+            "--bvh-width=8",
+        ]);
+        assert_eq!(chosen.profile, Profile::Course);
+        assert_eq!(chosen.mode, RenderMode::Scalar);
+        assert_eq!(chosen.accel.bvh, BvhBuild::Midpoint);
+        assert_eq!(chosen.accel.bvh_width, Some(BvhWidth::Eight));
+        assert!(Cli::try_parse_from(["p3trace", "render", "x.p3f", "--mode=Scalar"]).is_err());
+        for (name, up) in [("y", Up::Y), ("z", Up::Z)] {
+            let line = ["p3trace", "gen", "skybox", "-o", "sky", "--up", name];
+            let Command::Gen(GenCommand::Skybox { up: parsed, .. }) =
+                Cli::try_parse_from(line).unwrap().command
+            else {
+                unreachable!("a skybox command")
+            };
+            assert_eq!(parsed, up);
+        }
     }
 
     #[test]

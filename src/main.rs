@@ -13,22 +13,19 @@ use std::process::ExitCode;
 use clap::{CommandFactory, Parser};
 
 use cli::{
-    AccelArgs, AccelChoice, BenchArgs, BvhChoice, Cli, Command, CompareArgs, GenCommand, InfoArgs,
-    MergeArgs, ModeChoice, ProfileChoice, RenderArgs, SceneOutput, UpAxis,
+    BenchArgs, Cli, Command, CompareArgs, GenCommand, InfoArgs, MergeArgs, RenderArgs, SceneOutput,
 };
-use p3trace::accel::{AccelKind, AccelOptions, Tracer};
-use p3trace::accel::{BvhBuild, BvhWidth};
+use p3trace::accel::{AccelOptions, Tracer};
 use p3trace::compare::levels;
 use p3trace::farm::{self, Canvas};
 use p3trace::generate::{dragon, mountain, random, skybox, sphereflake};
 use p3trace::plural::{count, noun};
 use p3trace::prim::PrimKind;
-use p3trace::render::film::{OutputFormat, Placement};
+use p3trace::render::film::{Film, OutputFormat, Placement};
 use p3trace::render::progress::Progress;
 use p3trace::render::region::Region;
 use p3trace::render::sampler::SampleGrid;
-use p3trace::render::shade::Profile;
-use p3trace::render::{self, RenderMode, RenderOptions, Sampling};
+use p3trace::render::{self, RenderOptions, RenderReport, Sampling};
 use p3trace::scene::{self, Frame, Light, Scene};
 
 /// Why the command failed, and so which exit code it gives.
@@ -225,6 +222,21 @@ fn check_statistics_target(target: Option<&Path>) -> Result<(), Failure> {
 }
 
 fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
+    let output = render_output(args)?;
+    let (scene, scene_hash) = render_scene(args)?;
+    let options = render_options(args, &scene)?;
+    let report = render::render(&scene, &options).map_err(Failure::Run)?;
+    for w in &report.warnings {
+        eprintln!("p3trace: warning: {w}");
+    }
+    let note = farm::note(&scene, scene_hash, &options, report.skybox, args.tile);
+    write_image(&output, &options, &report.film, note)?;
+    summarise(args, &scene, &options, &report, &output)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The image `render` writes: `-o`, or the scene's name with .png in the current folder.
+fn render_output(args: &RenderArgs) -> Result<PathBuf, Failure> {
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy();
         PathBuf::from(format!("{stem}.png"))
@@ -234,7 +246,13 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     OutputFormat::from_path(&output).map_err(Failure::Usage)?;
     check_output(&output)?;
     check_statistics_target(args.json.as_deref())?;
-    let profile = profile(args.profile);
+    Ok(output)
+}
+
+/// The scene as `render` takes it, read in the profile's frame, its lens as the flags set
+/// it; and the hash of its text, for the image's note.
+fn render_scene(args: &RenderArgs) -> Result<(Scene, u64), Failure> {
+    let profile = args.profile;
     let mut scene = load_scene(&args.scene, args.seed, profile.frame())?;
     let scene_hash = scene_hash(&args.scene, args.seed)?;
     if let Some(aperture) = args.aperture {
@@ -247,15 +265,19 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
         .camera
         .validate()
         .map_err(|e| Failure::Usage(format!("{}: {e}", scene.name)))?;
+    Ok((scene, scene_hash))
+}
 
-    let mut options = RenderOptions::from_scene(&scene);
+/// The scene's render options as the flags change them; an image too large is refused.
+fn render_options(args: &RenderArgs, scene: &Scene) -> Result<RenderOptions, Failure> {
+    let mut options = RenderOptions::from_scene(scene);
     if let Some((w, h)) = args.resolution {
         (options.width, options.height) = (w, h);
     }
     if let Some(n) = args.spp {
         options.sampling = Sampling::from_samples_per_pixel(n).map_err(Failure::Usage)?;
     }
-    options.shade = options.shade.with_profile(profile);
+    options.shade = options.shade.with_profile(args.profile);
     if let Some(depth) = args.max_depth {
         options.shade.max_depth = depth;
     }
@@ -269,47 +291,57 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     options.skybox = !args.no_skybox;
     options.threads = args.threads.map(|n| n as usize);
     options.seed = args.seed;
-    options.mode = match args.mode {
-        ModeChoice::Scalar => RenderMode::Scalar,
-        ModeChoice::Stream => RenderMode::Stream,
-    };
+    options.mode = args.mode;
     options.progress = match (args.quiet, std::io::stderr().is_terminal()) {
         (true, _) => Progress::Hidden,
         (false, true) => Progress::Bar,
         (false, false) => Progress::Lines,
     };
-    options.accel = accel_options(&scene, &args.accel);
-    let (width, height) = (options.width, options.height);
-    options.region = match (args.crop, args.pixel_bounds, args.tile) {
+    options.accel = args.accel.options(scene.accel);
+    options.region = region(args, options.width, options.height)?;
+    options.check_size().map_err(Failure::Usage)?;
+    Ok(options)
+}
+
+/// The region of a `width` x `height` image that `--crop`, `--pixel-bounds` or `--tile`
+/// asks for, if any.
+fn region(args: &RenderArgs, width: u32, height: u32) -> Result<Option<Region>, Failure> {
+    match (args.crop, args.pixel_bounds, args.tile) {
         (Some(crop), _, _) => Some(Region::crop(crop, width, height)),
         (_, Some(bounds), _) => Some(Region::pixel_bounds(bounds, width, height)),
         (_, _, Some(t)) => Some(Region::tile(t.index, t.count, width, height)),
         _ => None,
     }
     .transpose()
-    .map_err(Failure::Usage)?;
-    options.check_size().map_err(Failure::Usage)?;
+    .map_err(Failure::Usage)
+}
 
-    let report = render::render(&scene, &options).map_err(Failure::Run)?;
-    for w in &report.warnings {
-        eprintln!("p3trace: warning: {w}");
-    }
+/// Writes `film`, the pixels of the options' region, to `output` in its place in the
+/// whole image, with the `note` that `merge` checks (kept by EXR files).
+fn write_image(
+    output: &Path,
+    options: &RenderOptions,
+    film: &Film,
+    note: String,
+) -> Result<(), Failure> {
     let region = options.region();
     let placement = Placement {
-        image: (width, height),
+        image: (options.width, options.height),
         origin: (region.x0, region.y0),
-        note: Some(farm::note(
-            &scene,
-            scene_hash,
-            &options,
-            report.skybox,
-            args.tile,
-        )),
+        note: Some(note),
     };
-    report
-        .film
-        .write_placed(&output, &placement)
-        .map_err(Failure::Run)?;
+    film.write_placed(output, &placement).map_err(Failure::Run)
+}
+
+/// What `render` says when done: the structure's build with `--stats`, the closing line
+/// unless `--quiet`, and the statistics with `--json`.
+fn summarise(
+    args: &RenderArgs,
+    scene: &Scene,
+    options: &RenderOptions,
+    report: &RenderReport,
+    output: &Path,
+) -> Result<(), Failure> {
     let say = human_output(args.json.as_deref());
     if args.stats {
         say(&format!(
@@ -322,67 +354,41 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
         }
     }
     if !args.quiet {
-        let seconds = report.elapsed.as_secs_f64();
-        let rays = report.rays.total();
-        let part = if options.region.is_some() {
-            format!(
-                " (region {},{},{},{})",
-                region.x0, region.x1, region.y0, region.y1
-            )
-        } else {
-            String::new()
-        };
-        say(&format!(
-            "{}: {}x{}{part}, {}, {:.3} s, {} {}, {:.2} Mrays/s -> {}",
-            scene.name,
-            options.width,
-            options.height,
-            samples_label(options.sampling),
-            seconds,
-            grouped(rays),
-            noun(rays as f64, "ray", "rays"),
-            rays as f64 / 1e6 / seconds.max(1e-9),
-            output.display()
-        ));
+        say(&closing_line(scene, options, report, output));
     }
     if let Some(target) = &args.json {
-        let value = statistics::render(&scene, &options, &report, &output);
+        let value = statistics::render(scene, options, report, output);
         statistics::write(target, &value).map_err(Failure::Run)?;
     }
-    Ok(ExitCode::SUCCESS)
+    Ok(())
 }
 
-fn profile(choice: ProfileChoice) -> Profile {
-    match choice {
-        ProfileChoice::Standard => Profile::Standard,
-        ProfileChoice::Course => Profile::Course,
-    }
-}
-
-/// The structure the command line asks for (by default the fastest, whatever the file
-/// says), with its build settings.
-fn accel_options(scene: &Scene, args: &AccelArgs) -> AccelOptions {
-    let kind = match args.accel {
-        AccelChoice::Auto => AccelKind::Bvh,
-        AccelChoice::File => scene.accel.unwrap_or(AccelKind::Bvh),
-        AccelChoice::None => AccelKind::None,
-        AccelChoice::Grid => AccelKind::Grid,
-        AccelChoice::Bvh => AccelKind::Bvh,
+/// `balls_low.p3f: 512x512, 1 spp, 0.128 s, 1,171,239 rays, 9.17 Mrays/s -> balls_low.png`,
+/// the region after the size when there is one.
+fn closing_line(
+    scene: &Scene,
+    options: &RenderOptions,
+    report: &RenderReport,
+    output: &Path,
+) -> String {
+    let seconds = report.elapsed.as_secs_f64();
+    let rays = report.rays.total();
+    let part = match options.region {
+        Some(r) => format!(" (region {},{},{},{})", r.x0, r.x1, r.y0, r.y1),
+        None => String::new(),
     };
-    AccelOptions {
-        kind,
-        bvh: match args.bvh {
-            BvhChoice::Sah => BvhBuild::Sah,
-            BvhChoice::Midpoint => BvhBuild::Midpoint,
-        },
-        bvh_width: args.bvh_width.map(|n| match n {
-            2 => BvhWidth::Two,
-            _ => BvhWidth::Eight,
-        }),
-        grid_density: args.grid_density,
-        mailbox: args.mailbox,
-        ..AccelOptions::default()
-    }
+    format!(
+        "{}: {}x{}{part}, {}, {:.3} s, {} {}, {:.2} Mrays/s -> {}",
+        scene.name,
+        options.width,
+        options.height,
+        samples_label(options.sampling),
+        seconds,
+        grouped(rays),
+        noun(rays as f64, "ray", "rays"),
+        rays as f64 / 1e6 / seconds.max(1e-9),
+        output.display()
+    )
 }
 
 fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
@@ -410,12 +416,14 @@ fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
         );
     }
     println!("materials: {}", scene.materials.len());
-    let area = scene
-        .lights
+    let lights: Vec<String> = Light::KINDS
         .iter()
-        .filter(|l| matches!(l, Light::Area { .. }))
-        .count();
-    println!("lights: {} point, {} area", scene.lights.len() - area, area);
+        .map(|&kind| {
+            let n = scene.lights.iter().filter(|l| l.kind() == kind).count();
+            format!("{n} {kind}")
+        })
+        .collect();
+    println!("lights: {}", lights.join(", "));
     let c = &scene.camera;
     println!(
         "camera: from {} at {} up {}, angle {}, {}x{}, hither {}, aperture {}, focal {}",
@@ -437,14 +445,14 @@ fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
     println!("spp (file): {}", scene.spp);
     // The structure as `render` builds it: over positions in the profile's frame, moving
     // spheres bounded over the scene's default shutter.
-    let frame = profile(args.profile).frame();
+    let frame = args.profile.frame();
     let rendered = (frame != Frame::File)
         .then(|| read_scene(&args.scene, args.seed, frame))
         .transpose()?;
     let rendered = rendered.as_ref().unwrap_or(&scene);
     let options = AccelOptions {
         shutter: RenderOptions::from_scene(rendered).shutter,
-        ..accel_options(rendered, &args.accel)
+        ..args.accel.options(rendered.accel)
     };
     let structure = Tracer::new(&rendered.geometry, &options);
     println!(
@@ -574,7 +582,7 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     check_statistics_target(args.json.as_deref())?;
     // The protocol's rays are made in the file's coordinates, as the Embree harness's.
     let scene = load_scene(&args.scene, args.seed, Frame::File)?;
-    let options = accel_options(&scene, &args.accel);
+    let options = args.accel.options(scene.accel);
     let tracer = Tracer::new(&scene.geometry, &options);
     let (name, stats, build_time) = (tracer.name(), tracer.stats(), tracer.build_time());
     let sets = bench::ray_sets(&scene, &tracer);
@@ -676,10 +684,6 @@ fn run_gen(command: GenCommand) -> Result<ExitCode, Failure> {
             (dragon::dragon_scene(&mesh, &source, env.as_deref()), out)
         }
         GenCommand::Skybox { up, size, output } => {
-            let up = match up {
-                UpAxis::Y => skybox::Up::Y,
-                UpAxis::Z => skybox::Up::Z,
-            };
             skybox::write_skybox(&output, size, up).map_err(Failure::Run)?;
             return Ok(ExitCode::SUCCESS);
         }

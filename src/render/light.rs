@@ -1,7 +1,9 @@
 //! The lights as the shader samples them (P3F.md 6.3): each scene light becomes an
 //! [`Emitter`], a fixed point or a rectangle sampled at one jittered point of the
-//! sample's cell; without antialiasing rectangles become grids of points. The shader
-//! (`shade.rs`) asks only for the point of a light that a sample sees.
+//! sample's cell; without antialiasing rectangles become grids of points. Given the
+//! point it lights ([`Receiver`]), an emitter says where its light comes from, how far,
+//! and with what colour ([`Emitter::sample`], as pbrt-v4's `SampleLi`): the shader
+//! (`shade.rs`) and the bench's shadow rays (`bench.rs`) work out nothing more.
 //!
 //! A soft point light's square lies in the plane perpendicular to the camera's up, its
 //! sides along `up x X` (`up x Z` when up is close to X) and the third axis. An `al` light
@@ -10,7 +12,9 @@
 //! sample's path, from that ray's own random numbers, in the cell of the sample's grid
 //! that its primary sample took.
 
-use glam::Vec3;
+use std::ops::Sub;
+
+use glam::{DVec3, Vec3};
 
 use super::sampler::{dim, Sample, SampleGrid};
 use crate::scene::Light;
@@ -67,9 +71,86 @@ impl Rectangle {
     }
 }
 
+/// Where light arrives: a point of a surface, the surface's unit normal turned to face
+/// the ray that found it, and the origin of shadow rays from there, off the surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Receiver<V> {
+    pub point: V,
+    pub normal: V,
+    pub origin: V,
+}
+
+/// The light that one point of a light sends a receiver: the unit direction from the
+/// receiver's origin towards it, its distance along that direction, and the colour that
+/// arrives when nothing is in the way.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Incident<V> {
+    pub dir: V,
+    pub distance: f32,
+    pub colour: Vec3,
+}
+
+/// The vectors lights are sampled in: `Vec3`, the renderer's, and `DVec3`, in which the
+/// bench makes the protocol's rays as the Embree harness does. Each rounds as its caller's
+/// rays always have: images and checksums are made of those bits.
+pub trait Vector: Copy + From<Vec3> + Sub<Output = Self> {
+    /// `self` points along or below the plane of `normal`: `normal . self <= 0`.
+    fn below(self, normal: Self) -> bool;
+    /// The unit vector along `self`, and its length.
+    fn unit(self) -> (Self, f32);
+}
+
+impl Vector for Vec3 {
+    fn below(self, normal: Self) -> bool {
+        normal.dot(self) <= 0.0
+    }
+
+    /// Divided by its length.
+    fn unit(self) -> (Self, f32) {
+        let length = self.length();
+        (self / length, length)
+    }
+}
+
+impl Vector for DVec3 {
+    fn below(self, normal: Self) -> bool {
+        normal.dot(self) <= 0.0
+    }
+
+    /// Scaled by the reciprocal of its length, as the harness normalises; the length
+    /// rounded to `f32` last.
+    fn unit(self) -> (Self, f32) {
+        (self.normalize(), self.length() as f32)
+    }
+}
+
 impl Emitter {
+    /// The light that the point of this light (the `index`-th that [`emitters`] made)
+    /// that `sample` sees sends `receiver`; `None` when that point is not above the
+    /// tangent plane of the receiver's surface.
+    // Inlined into the shader's two paths: see `Shader::shadow_ray`.
+    #[inline(always)]
+    pub fn sample<V: Vector>(
+        &self,
+        index: usize,
+        receiver: &Receiver<V>,
+        sample: &Sample,
+    ) -> Option<Incident<V>> {
+        let light = self.point(index, sample);
+        let position = V::from(light.position);
+        if (position - receiver.point).below(receiver.normal) {
+            return None;
+        }
+        let (dir, distance) = (position - receiver.origin).unit();
+        Some(Incident {
+            dir,
+            distance,
+            colour: light.colour,
+        })
+    }
+
     /// The point of this light (the `index`-th of the shader's) that `sample` sees.
-    pub fn point(&self, index: usize, sample: &Sample) -> LightSample {
+    fn point(&self, index: usize, sample: &Sample) -> LightSample {
         match self {
             Emitter::Point(light) => *light,
             Emitter::Rectangle(rectangle) => {
@@ -194,6 +275,43 @@ mod tests {
             assert!((s.position.y - 5.0).abs() < 1e-6);
             assert!(s.position.x.abs() < 1.0 && s.position.z.abs() < 0.5);
         }
+    }
+
+    /// A receiver at the origin facing up, its shadow rays starting 0.1 above it.
+    fn receiver<V: Vector>() -> Receiver<V> {
+        Receiver {
+            point: V::from(Vec3::ZERO),
+            normal: V::from(Vec3::Y),
+            origin: V::from(Vec3::new(0.0, 0.1, 0.0)),
+        }
+    }
+
+    #[test]
+    fn a_light_above_the_surface_lights_it_from_the_receivers_origin() {
+        let light = |position: Vec3| {
+            Emitter::Point(LightSample {
+                position,
+                colour: Vec3::new(0.5, 0.25, 1.0),
+            })
+        };
+        let one = sample([0, 0], SampleGrid::square(1), 0);
+        // Above the tangent plane but below the origin: lit, from the origin downwards.
+        let low = Vec3::new(4.0, 0.05, 3.0);
+        let incident = light(low).sample(0, &receiver::<Vec3>(), &one).unwrap();
+        let to_light = low - Vec3::new(0.0, 0.1, 0.0);
+        assert_eq!(incident.dir, to_light / to_light.length());
+        assert_eq!(incident.distance, to_light.length());
+        assert_eq!(incident.colour, Vec3::new(0.5, 0.25, 1.0));
+        assert!(incident.dir.y < 0.0);
+        // In the tangent plane or below it: no light.
+        for position in [Vec3::new(4.0, 0.0, 3.0), Vec3::new(0.0, -2.0, 0.0)] {
+            assert_eq!(light(position).sample(0, &receiver::<Vec3>(), &one), None);
+        }
+        // In double precision, normalised as the Embree harness does: scaled by 1 / length.
+        let incident = light(low).sample(0, &receiver::<DVec3>(), &one).unwrap();
+        let to_light = low.as_dvec3() - DVec3::new(0.0, f64::from(0.1f32), 0.0);
+        assert_eq!(incident.dir, to_light * (1.0 / to_light.length()));
+        assert_eq!(incident.distance, to_light.length() as f32);
     }
 
     fn sample(cell: [u32; 2], grid: SampleGrid, index: u32) -> Sample {

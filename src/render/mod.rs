@@ -12,6 +12,7 @@
 
 pub mod camera;
 pub mod film;
+pub mod jpeg_scan;
 pub mod light;
 pub mod progress;
 pub mod region;
@@ -216,7 +217,15 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         || Tracer::new(&scene.geometry, &accel_options),
     );
     let skybox = match skybox {
-        Some(Ok(sky)) => Some(sky),
+        Some(Ok(sky)) => {
+            warnings.extend(sky.damaged().iter().map(|face| {
+                format!(
+                    "damaged skybox face {face}: it is drawn as far as it decodes \
+                     (a copy whose line endings were converted has lost bytes)"
+                )
+            }));
+            Some(sky)
+        }
         Some(Err(e)) => {
             warnings.push(format!(
                 "skybox not loaded ({e}); the background colour is used instead"

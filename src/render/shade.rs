@@ -1,8 +1,8 @@
 //! Whitted shading exactly as P3F.md section 4: Blinn-Phong with `Katt`, shadows, mirror
 //! reflection, refraction with Fresnel (or Schlick), total internal reflection, and a
 //! clamp of every returned colour; and fuzzy reflections (P3F.md 6.4). The `course`
-//! [`Profile`] is section 11's model of the course's own renderer instead. Which point of
-//! each light a hit sees is for [`super::light`] to say.
+//! [`Profile`] is section 11's model of the course's own renderer instead. What light
+//! each light sends a hit, from where, is for [`super::light`] to say.
 //!
 //! A hit is shaded in two steps that the scalar recursion ([`Shader::trace`]) and the
 //! stream renderer (`stream.rs`) share, so both compute the same colours:
@@ -16,7 +16,7 @@
 
 use glam::Vec3;
 
-use super::light::{emitters, Emitter, DEFAULT_LIGHT_GRID};
+use super::light::{emitters, Emitter, Receiver, DEFAULT_LIGHT_GRID};
 use super::sampler::{dim, Sample, SampleGrid, SampleRng};
 use super::skybox::Skybox;
 use crate::accel::Tracer;
@@ -412,18 +412,19 @@ impl<'a> Shader<'a> {
         surface: &Surface,
         time: f32,
     ) -> Option<ShadowRay> {
-        let light = self.lights[index].point(index, sample);
-        let Surface { p, nf, .. } = *surface;
-        if nf.dot(light.position - p) <= 0.0 {
-            return None;
-        }
-        let origin = surface.outward;
-        let to_light = light.position - origin;
-        let distance = to_light.length();
-        let dir = to_light / distance;
+        let receiver = Receiver {
+            point: surface.p,
+            normal: surface.nf,
+            origin: surface.outward,
+        };
+        let light = self.lights[index].sample(index, &receiver, sample)?;
         Some(ShadowRay {
-            ray: Ray { origin, dir, time },
-            distance,
+            ray: Ray {
+                origin: receiver.origin,
+                dir: light.dir,
+                time,
+            },
+            distance: light.distance,
             colour: light.colour,
         })
     }

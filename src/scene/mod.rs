@@ -54,6 +54,19 @@ pub enum Light {
     },
 }
 
+impl Light {
+    /// The kinds of light, in the order `info` counts them.
+    pub const KINDS: [&'static str; 2] = ["point", "area"];
+
+    /// This light's kind, one of [`Light::KINDS`].
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Light::Point { .. } => "point",
+            Light::Area { .. } => "area",
+        }
+    }
+}
+
 /// The camera block `v` as written in the file (P3F.md section 3).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraSpec {
