@@ -21,6 +21,7 @@ use glam::{IVec3, UVec3, Vec3};
 
 use super::bounds::prim_bounds;
 use super::hit::{for_lanes, test_packet, ClosestHit};
+use super::structure::Structure;
 use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay, RayQuery, RayQuery8};
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{lane_mask, Ray, RayPacket};
@@ -162,8 +163,10 @@ impl Grid {
             "grid".into()
         }
     }
+}
 
-    pub fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
+impl Structure for Grid {
+    fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
         Mailbox::with(self.mailbox, self.prims.len(), |mailbox| {
             self.walk(query, closest.limit(), |cell_refs, t_exit| {
                 for &r in cell_refs {
@@ -181,7 +184,7 @@ impl Grid {
         });
     }
 
-    pub fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
+    fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
         let mut blocked = false;
         Mailbox::with(self.mailbox, self.prims.len(), |mailbox| {
             self.walk(query, t_max, |cell_refs, _| {
@@ -199,40 +202,18 @@ impl Grid {
         blocked
     }
 
-    /// The 3D-DDA: calls `visit` with each cell's objects and the distance at which the
-    /// ray leaves that cell, in order along the ray, while `visit` says to continue and
-    /// the ray is within `(query.t_min, t_max)` (which `visit` may shrink).
-    fn walk(&self, query: &RayQuery, t_max: f32, mut visit: impl FnMut(&[u32], f32) -> Walk) {
-        let (ray, inv_dir, t_min) = (&query.ray, query.inv_dir, query.t_min);
-        let Some(mut dda) = Dda::start(self, ray, inv_dir, t_min, t_max) else {
-            return;
-        };
-        loop {
-            let cell_refs = self.cell_refs(dda.cell);
-            if !cell_refs.is_empty() {
-                match visit(cell_refs, dda.t_exit()) {
-                    Walk::Stop => return,
-                    Walk::Continue(limit) => dda.t_end = dda.t_end.min(limit),
-                }
-            }
-            if !dda.advance(self) {
-                return;
-            }
-        }
-    }
-
-    /// The closest hits of the active lanes of `query`'s packet, as [`Grid::closest`] finds
+    /// The closest hits of the active lanes of `query`'s packet, as one ray's walk finds
     /// each. Each lane walks its own 3D-DDA; at every step the lanes that stand in the
     /// same cell test its objects together, by the primitives' packet kernels (so a
     /// coherent packet tests each object once for all its rays). Mailboxing plays no
     /// part here: it changes how often an object is tested, never the answer.
-    pub fn closest_packet(
+    fn closest_packet(
         &self,
         geometry: &Geometry,
         query: &RayQuery8,
-        hits: &mut [ClosestHit; 8],
+        closest: &mut [ClosestHit; 8],
     ) {
-        let (closest, packet) = (hits, query.packet);
+        let packet = query.packet;
         let packet_inv_dir = packet.inv_dir_lanes();
         let limits = closest.each_ref().map(|c| c.limit());
         let mut walks = self.start_walks(packet, &packet_inv_dir, &limits);
@@ -269,8 +250,8 @@ impl Grid {
     }
 
     /// The active lanes of `query`'s packet whose ray is blocked within its interval,
-    /// walked as in [`Grid::closest_packet`].
-    pub fn occluded_packet(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
+    /// walked as the closest hits are.
+    fn occluded_packet(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
         let (packet, t_max) = (query.packet, &query.packet.t_max);
         let packet_inv_dir = packet.inv_dir_lanes();
         let mut walks = self.start_walks(packet, &packet_inv_dir, t_max);
@@ -306,6 +287,30 @@ impl Grid {
             });
             for (k, walk) in walks.iter_mut().enumerate() {
                 self.step(walk, blocked & (1 << k) != 0);
+            }
+        }
+    }
+}
+
+impl Grid {
+    /// The 3D-DDA: calls `visit` with each cell's objects and the distance at which the
+    /// ray leaves that cell, in order along the ray, while `visit` says to continue and
+    /// the ray is within `(query.t_min, t_max)` (which `visit` may shrink).
+    fn walk(&self, query: &RayQuery, t_max: f32, mut visit: impl FnMut(&[u32], f32) -> Walk) {
+        let (ray, inv_dir, t_min) = (&query.ray, query.inv_dir, query.t_min);
+        let Some(mut dda) = Dda::start(self, ray, inv_dir, t_min, t_max) else {
+            return;
+        };
+        loop {
+            let cell_refs = self.cell_refs(dda.cell);
+            if !cell_refs.is_empty() {
+                match visit(cell_refs, dda.t_exit()) {
+                    Walk::Stop => return,
+                    Walk::Continue(limit) => dda.t_end = dda.t_end.min(limit),
+                }
+            }
+            if !dda.advance(self) {
+                return;
             }
         }
     }

@@ -1,6 +1,9 @@
 //! Closest-hit and occlusion queries over a scene's geometry (P3F.md section 9).
 //!
-//! Every accelerator sits behind [`Accel`], so the renderer does not care which one runs.
+//! Every accelerator answers the queries of [`Structure`] and sits behind [`Accel`], so
+//! the renderer does not care which one runs; [`Tracer::new`] builds it from
+//! [`AccelOptions`], which also say how the primitives are tested (the profile's
+//! [`IntersectOptions`], carried by every query).
 //! Planes are unbounded and never go into a structure: [`Tracer`] tests them on their own
 //! beside whatever the accelerator returns.
 //!
@@ -11,8 +14,8 @@
 //! [`Tracer`] answers a ray whose origin is not finite, or whose direction is zero or not
 //! finite, with a miss before any structure sees it: the structures would disagree on it.
 //! It takes one ray at a time or a [`RayPacket`]: the 8-wide BVH and the grid trace a
-//! packet together, brute force and the binary BVH lane by lane, and every lane's answer
-//! is its single ray's.
+//! packet together, brute force and the binary BVH lane by lane ([`Structure`]'s
+//! defaults), and every lane's answer is its single ray's.
 
 pub mod bounds;
 pub mod bvh2;
@@ -21,6 +24,7 @@ pub mod grid;
 mod hit;
 mod none;
 mod stack;
+mod structure;
 
 use std::time::{Duration, Instant};
 
@@ -35,6 +39,8 @@ use bvh8::Bvh8;
 use grid::Grid;
 use hit::test_packet;
 pub use hit::ClosestHit;
+use none::BruteForce;
+pub use structure::Structure;
 
 /// The acceleration structure over a scene's bounded primitives: one variant per
 /// traversal engine.
@@ -171,6 +177,50 @@ impl Accel {
     }
 }
 
+/// `$call` with `$s` the structure `$accel` holds, as its own type (no dynamic dispatch
+/// in the queries).
+macro_rules! with_structure {
+    ($accel:expr, |$s:ident| $call:expr) => {
+        match $accel {
+            Accel::None => {
+                let $s = &BruteForce;
+                $call
+            }
+            Accel::Grid($s) => $call,
+            Accel::Bvh2($s) => $call,
+            Accel::Bvh8($s) => $call,
+        }
+    };
+}
+
+/// Each query by the structure's own walk, or its lane-by-lane default.
+impl Structure for Accel {
+    #[inline]
+    fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
+        with_structure!(self, |s| s.closest(geometry, query, closest))
+    }
+
+    #[inline]
+    fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
+        with_structure!(self, |s| s.occluded(geometry, query, t_max))
+    }
+
+    #[inline]
+    fn closest_packet(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery8,
+        closest: &mut [ClosestHit; 8],
+    ) {
+        with_structure!(self, |s| s.closest_packet(geometry, query, closest))
+    }
+
+    #[inline]
+    fn occluded_packet(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
+        with_structure!(self, |s| s.occluded_packet(geometry, query))
+    }
+}
+
 /// Answers ray queries for one scene: the accelerator for bounded primitives, planes apart.
 pub struct Tracer<'s> {
     pub geometry: &'s Geometry,
@@ -216,13 +266,7 @@ impl<'s> Tracer<'s> {
         }
         let query = RayQuery::new(ray, t_min, self.options);
         let mut closest = ClosestHit::new(t_max);
-        let g = self.geometry;
-        match &self.accel {
-            Accel::None => none::closest(g, &query, &mut closest),
-            Accel::Grid(grid) => grid.closest(g, &query, &mut closest),
-            Accel::Bvh2(bvh) => bvh.closest(g, &query, &mut closest),
-            Accel::Bvh8(bvh) => bvh.closest(g, &query, &mut closest),
-        }
+        self.accel.closest(self.geometry, &query, &mut closest);
         self.nearer_plane(&query, t_max, closest.hit())
     }
 
@@ -239,14 +283,8 @@ impl<'s> Tracer<'s> {
             return false;
         }
         let query = RayQuery::new(ray, t_min, self.options);
-        let g = self.geometry;
         self.closest_plane(&query, t_max).is_some()
-            || match &self.accel {
-                Accel::None => none::occluded(g, &query, t_max),
-                Accel::Grid(grid) => grid.occluded(g, &query, t_max),
-                Accel::Bvh2(bvh) => bvh.occluded(g, &query, t_max),
-                Accel::Bvh8(bvh) => bvh.occluded(g, &query, t_max),
-            }
+            || self.accel.occluded(self.geometry, &query, t_max)
     }
 
     /// The closest hit of each active lane of `packet` within its interval; `None` for
@@ -259,23 +297,12 @@ impl<'s> Tracer<'s> {
             return self.closest_packet(&packet.with_active(active));
         }
         let mut closest = packet.t_max.map(ClosestHit::new);
-        let g = self.geometry;
-        let (rays, t_min, t_max) = (packet.rays, packet.t_min, &packet.t_max);
         let query = RayQuery8 {
             packet,
             options: self.options,
         };
-        match &self.accel {
-            Accel::Bvh8(bvh) => bvh.closest_packet(g, &query, &mut closest),
-            Accel::Grid(grid) => grid.closest_packet(g, &query, &mut closest),
-            Accel::None | Accel::Bvh2(_) => {
-                return std::array::from_fn(|k| {
-                    (active & (1 << k) != 0)
-                        .then(|| self.closest(&rays[k], t_min, t_max[k]))
-                        .flatten()
-                })
-            }
-        }
+        self.accel
+            .closest_packet(self.geometry, &query, &mut closest);
         // As `nearer_plane` for each lane: a plane must be closer than the structure's hit.
         let planes = self.closest_planes(&query, active, closest.map(|c| c.limit()));
         let bounded = closest.map(|c| c.hit());
@@ -290,25 +317,16 @@ impl<'s> Tracer<'s> {
     /// mask: the answers of [`Tracer::occluded`], traced as one packet by the 8-wide BVH
     /// and the grid.
     pub fn occluded_packet(&self, packet: &RayPacket) -> u8 {
-        let (rays, t_min, t_max) = (packet.rays, packet.t_min, &packet.t_max);
         let active = packet.active & packet.traceable();
         let options = self.options;
-        let planes = self.closest_planes(&RayQuery8 { packet, options }, active, *t_max);
+        let planes = self.closest_planes(&RayQuery8 { packet, options }, active, packet.t_max);
         let by_plane = lane_mask(|k| planes[k].is_some());
         let rest = packet.with_active(active & !by_plane);
         let query = RayQuery8 {
             packet: &rest,
             options,
         };
-        let g = self.geometry;
-        let blocked = match &self.accel {
-            Accel::Bvh8(bvh) => bvh.occluded_packet(g, &query),
-            Accel::Grid(grid) => grid.occluded_packet(g, &query),
-            Accel::None | Accel::Bvh2(_) => lane_mask(|k| {
-                rest.active & (1 << k) != 0 && self.occluded(&rays[k], t_min, t_max[k])
-            }),
-        };
-        by_plane | blocked
+        by_plane | self.accel.occluded_packet(self.geometry, &query)
     }
 
     /// [`Tracer::closest_plane`] for the lanes `lanes` of `query`'s packet, each within

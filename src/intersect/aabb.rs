@@ -210,16 +210,22 @@ impl LeafPack for Boxes {
         t_max: F32x8,
         active: u8,
     ) -> TriangleHit8 {
-        let (min, max) = pack.corners(slot);
-        TriangleHit8::at(aabb_packet(
-            query.packet,
-            min,
-            max,
-            query.t_min8(),
-            t_max,
-            active,
-        ))
+        aabb8(query, pack.corners(slot), t_max, active)
     }
+}
+
+/// [`aabb_packet`] for the lanes `active` of `query`'s packet, in the form of the
+/// storage's and the pack's packet tests.
+#[inline(always)]
+fn aabb8(query: &RayQuery8, (min, max): (Vec3, Vec3), t_max: F32x8, active: u8) -> TriangleHit8 {
+    TriangleHit8::at(aabb_packet(
+        query.packet,
+        min,
+        max,
+        query.t_min8(),
+        t_max,
+        active,
+    ))
 }
 
 impl Shapes for Boxes {
@@ -240,15 +246,7 @@ impl Shapes for Boxes {
     }
 
     fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
-        let (min, max) = (self.min.get(i), self.max.get(i));
-        TriangleHit8::at(aabb_packet(
-            query.packet,
-            min,
-            max,
-            query.t_min8(),
-            t_max,
-            active,
-        ))
+        aabb8(query, (self.min.get(i), self.max.get(i)), t_max, active)
     }
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {

@@ -222,17 +222,18 @@ impl LeafPack for Spheres {
         active: u8,
     ) -> TriangleHit8 {
         let (centre, radius) = (pack.centre.lane(slot), pack.radius.to_array()[slot]);
-        let (roots, t_min) = (query.options.sphere_roots, query.t_min8());
-        TriangleHit8::at(sphere_packet(
-            query.packet,
-            centre,
-            radius,
-            roots,
-            t_min,
-            t_max,
-            active,
-        ))
+        sphere8(query, centre, radius, t_max, active)
     }
+}
+
+/// [`sphere_packet`] for the lanes `active` of `query`'s packet, in the form of the
+/// storage's and the pack's packet tests, with the form of the roots the query chose.
+#[inline(always)]
+fn sphere8(query: &RayQuery8, centre: Vec3, radius: f32, t_max: F32x8, active: u8) -> TriangleHit8 {
+    let (rays, roots, t_min) = (query.packet, query.options.sphere_roots, query.t_min8());
+    TriangleHit8::at(sphere_packet(
+        rays, centre, radius, roots, t_min, t_max, active,
+    ))
 }
 
 /// [`Shapes::surface_point`] of a sphere. The hit's offset from the centre is taken as
@@ -294,17 +295,7 @@ impl Shapes for Spheres {
     }
 
     fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
-        let (centre, radius) = (self.centre.get(i), self.radius[i]);
-        let (roots, t_min) = (query.options.sphere_roots, query.t_min8());
-        TriangleHit8::at(sphere_packet(
-            query.packet,
-            centre,
-            radius,
-            roots,
-            t_min,
-            t_max,
-            active,
-        ))
+        sphere8(query, self.centre.get(i), self.radius[i], t_max, active)
     }
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {

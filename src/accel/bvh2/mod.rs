@@ -20,6 +20,7 @@ use glam::Vec3;
 
 use super::hit::ClosestHit;
 use super::stack::Stack;
+use super::structure::Structure;
 use crate::intersect::{beyond, Aabb, BoxRay, RayQuery};
 use crate::plural::count;
 use crate::prim::PrimId;
@@ -163,8 +164,10 @@ impl Bvh2 {
     pub fn into_parts(self) -> (Vec<Node>, Vec<PrimId>) {
         (self.nodes, self.prims)
     }
+}
 
-    pub fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
+impl Structure for Bvh2 {
+    fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
         let Some(root) = self.nodes.first() else {
             return;
         };
@@ -210,7 +213,7 @@ impl Bvh2 {
         }
     }
 
-    pub fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
+    fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
@@ -237,7 +240,9 @@ impl Bvh2 {
         }
         false
     }
+}
 
+impl Bvh2 {
     pub fn stats(&self) -> Bvh2Stats {
         // Counted in place: a list of the leaves took 8 bytes a primitive.
         let leaves = || self.nodes.iter().filter(|n| n.count > 0);

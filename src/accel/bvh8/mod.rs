@@ -18,8 +18,12 @@ mod packet;
 mod traverse;
 
 use super::bvh2::{Bvh2Stats, BvhBuild};
+use super::hit::ClosestHit;
+use super::structure::Structure;
+use crate::intersect::{RayQuery, RayQuery8};
 use crate::plural::count;
 use crate::prim::PrimId;
+use crate::scene::Geometry;
 use leaves::Leaves;
 use node::{Node8, WIDTH};
 
@@ -39,6 +43,36 @@ pub struct Bvh8 {
 /// Entries on the traversal stack: each level pushes at most `WIDTH - 1`, and the binary
 /// trees stay under `bvh2::MAX_DEPTH` levels, which bounds the collapsed ones too.
 const STACK_SIZE: usize = (WIDTH - 1) * super::bvh2::MAX_DEPTH + 1;
+
+/// The walks from the root: one ray's in `traverse.rs`, a packet's in `packet.rs`.
+impl Structure for Bvh8 {
+    #[inline]
+    fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
+        if !self.nodes.is_empty() {
+            self.closest_from(0, geometry, query, closest);
+        }
+    }
+
+    #[inline]
+    fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
+        !self.nodes.is_empty() && self.occluded_from(0, geometry, query, t_max)
+    }
+
+    #[inline]
+    fn closest_packet(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery8,
+        closest: &mut [ClosestHit; 8],
+    ) {
+        self.packet_closest(geometry, query, closest);
+    }
+
+    #[inline]
+    fn occluded_packet(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
+        self.packet_occluded(geometry, query)
+    }
+}
 
 impl Bvh8 {
     /// The build the binary tree it was collapsed from ran.

@@ -23,14 +23,14 @@ impl Bvh8 {
     /// first (by the nearest lane's entry) with their lanes and that
     /// entry on the stack. An entry is skipped when it lies beyond every lane's closest
     /// hit; a subtree left with few lanes is finished one ray at a time. Each lane's
-    /// answer is the one [`Bvh8::closest`] gives.
-    pub fn closest_packet(
+    /// answer is the one single-ray walk ([`Bvh8::closest_from`]) gives.
+    pub(super) fn packet_closest(
         &self,
         geometry: &Geometry,
         query: &RayQuery8,
-        hits: &mut [ClosestHit; 8],
+        closest: &mut [ClosestHit; 8],
     ) {
-        let (closest, packet) = (hits, query.packet);
+        let packet = query.packet;
         let (active, t_min) = (packet.active, packet.t_min);
         if self.nodes.is_empty() || active == 0 {
             return;
@@ -86,8 +86,8 @@ impl Bvh8 {
     }
 
     /// The active lanes of `query`'s packet whose ray is blocked within its interval, as
-    /// a bit mask, the rays traced together as in [`Bvh8::closest_packet`].
-    pub fn occluded_packet(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
+    /// a bit mask, the rays traced together as in [`Bvh8::packet_closest`].
+    pub(super) fn packet_occluded(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
         let packet = query.packet;
         let (active, t_min, t_max) = (packet.active, packet.t_min, &packet.t_max);
         if self.nodes.is_empty() || active == 0 {

@@ -45,13 +45,7 @@ impl Bvh8 {
         })
     }
 
-    pub fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
-        if !self.nodes.is_empty() {
-            self.closest_from(0, geometry, query, closest);
-        }
-    }
-
-    /// [`Bvh8::closest`] over the subtree under `start`.
+    /// The closest hit of `query` in the subtree under `start`, offered to `closest`.
     #[inline]
     pub(super) fn closest_from(
         &self,
@@ -82,11 +76,8 @@ impl Bvh8 {
         }
     }
 
-    pub fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
-        !self.nodes.is_empty() && self.occluded_from(0, geometry, query, t_max)
-    }
-
-    /// [`Bvh8::occluded`] over the subtree under `start`.
+    /// Whether a primitive of the subtree under `start` blocks `query` within
+    /// `(query.t_min, t_max)`.
     #[inline(always)]
     pub(super) fn occluded_from(
         &self,
