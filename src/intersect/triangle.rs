@@ -1,8 +1,26 @@
 //! The triangle kind: its storage ([`Triangles`]: a vertex and two edges, optional vertex
 //! normals), Möller-Trumbore and its SIMD twins (eight rays against one triangle; one ray
 //! against a [`TrianglePack8`] of a BVH leaf).
+//!
+//! **Precision.** Single-precision Möller-Trumbore finds candidates; each hit it reports
+//! is computed again in double precision from the same inputs ([`refined`]), and stands
+//! only if that finds it too. Single precision fails in two ways that double precision
+//! does not: a sliver's determinant (edges parallel to within rounding) is noise, so `u`,
+//! `v` and `t` are too (a hit 0.09 off the plane); and from 1e9 away `t` keeps only the
+//! digits that `e2 . ((o - p0) x e1)` leaves (15,200 short of the plane). The products of
+//! single-precision numbers are exact in double precision, so the determinant, `u`, `v`
+//! and `t` are those of the triangle as stored, to a few roundings of doubles; `t` is then
+//! within an ulp or two of the distance to a point of the triangle, inside its padded box.
+//! The recomputation runs only on the lanes that hit (a few per ray), in scalar code
+//! shared by every twin, so each lane stays the scalar answer bit for bit. Only it
+//! compares `t` with `t_max`: a single-precision `t` can lie beyond a bound (the closest
+//! hit so far, in a structure) that the double-precision one ties, and the answer would
+//! then depend on the order the primitives are tested in. A watertight
+//! test (Woop, Benthin and Wald 2013) would also close the cracks along shared edges, but
+//! wants the three vertices stored and its shear per ray; cracks are not what the
+//! findings are, and the storage stays Möller-Trumbore's.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use super::{gamma, Aabb, LeafPack, RayQuery, RayQuery8, Shapes, SurfacePoint, Vec3s};
 use crate::ray::{Ray, RayPacket};
@@ -26,7 +44,8 @@ impl TriangleHit {
 
 /// Möller-Trumbore test against the triangle `p0, p0 + e1, p0 + e2`. Two-sided; edges and
 /// vertices count as inside. A triangle with zero edges (how the scene stores degenerate
-/// ones) has a zero determinant and is never hit.
+/// ones) has a zero determinant and is never hit. A hit is the double-precision one (the
+/// module's comment).
 pub fn triangle(
     ray: &Ray,
     p0: Vec3,
@@ -52,7 +71,107 @@ pub fn triangle(
         return None;
     }
     let t = e2.dot(q) * inv_det;
+    if !(t > t_min) {
+        return None;
+    }
+    refined(ray, p0, e1, e2, t_min, t_max)
+}
+
+/// Möller-Trumbore in double precision from the single-precision inputs: the hit of a
+/// candidate that the single-precision test found (see the module's comment).
+#[inline(never)]
+fn refined(ray: &Ray, p0: Vec3, e1: Vec3, e2: Vec3, t_min: f32, t_max: f32) -> Option<TriangleHit> {
+    let (origin, dir) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    let (p0, e1, e2) = (p0.as_dvec3(), e1.as_dvec3(), e2.as_dvec3());
+    let p = dir.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 {
+        return None;
+    }
+    let s = origin - p0;
+    let u = s.dot(p) / det;
+    let q = s.cross(e1);
+    let v = dir.dot(q) / det;
+    // Single precision decided that the ray is inside; within its error bound of the
+    // edges double precision keeps that decision, so that two triangles sharing an
+    // edge leave no crack between them that single precision did not.
+    let (err_u, err_v) = single_precision_error(dir, e1, e2, s, det, u, v);
+    let (tol_u, tol_v) = (err_u.min(MAX_EDGE_TOLERANCE), err_v.min(MAX_EDGE_TOLERANCE));
+    if !(u >= -tol_u && v >= -tol_v && u + v <= 1.0 + tol_u + tol_v) {
+        return None;
+    }
+    let t = (e2.dot(q) / det) as f32;
+    let (u, v) = (u as f32, v as f32);
     (t > t_min && t < t_max).then_some(TriangleHit { t, u, v })
+}
+
+/// The most that [`refined`] lets a hit lie outside the triangle, in barycentrics, where
+/// single precision's decision is within its error bound of an edge: beyond it (a
+/// sliver, a small triangle from 1e9 away) that decision is noise, and double
+/// precision's stands.
+const MAX_EDGE_TOLERANCE: f64 = 1.0 / 1024.0;
+
+/// Bounds of the errors of single precision's `u` and `v` (`triangle_lanes`), from the
+/// magnitudes of their terms (as pbrt bounds its sums): `u = (s . p) / det` and
+/// `v = (d . (s x e1)) / det`, `p = d x e2`, `det = e1 . p`, each term rounded a few times.
+fn single_precision_error(
+    dir: DVec3,
+    e1: DVec3,
+    e2: DVec3,
+    s: DVec3,
+    det: f64,
+    u: f64,
+    v: f64,
+) -> (f64, f64) {
+    let abs_cross = |a: DVec3, b: DVec3| {
+        let (a, b) = (a.abs(), b.abs());
+        DVec3::new(
+            a.y * b.z + a.z * b.y,
+            a.z * b.x + a.x * b.z,
+            a.x * b.y + a.y * b.x,
+        )
+    };
+    let gamma = f64::from(gamma(8));
+    let p = abs_cross(dir, e2);
+    let det_error = gamma * e1.abs().dot(p);
+    let u_error = gamma * s.abs().dot(p) + u.abs() * det_error;
+    let v_error = gamma * dir.abs().dot(abs_cross(s, e1)) + v.abs() * det_error;
+    // Twice the first-order bound, for the terms it leaves out.
+    let scale = 2.0 / det.abs();
+    (u_error * scale, v_error * scale)
+}
+
+/// The lanes of `hits` that [`refined`] confirms, with its `t`, `u` and `v`: lane `k`
+/// against the ray and the triangle `lane(k)` gives.
+#[inline(always)]
+fn refine_lanes(
+    hits: &mut TriangleHit8,
+    lane: impl Fn(usize) -> (Ray, [Vec3; 3]),
+    t_min: F32x8,
+    t_max: F32x8,
+) {
+    let mut mask = hits.hit.bitmask();
+    if mask == 0 {
+        return;
+    }
+    let (mut t, mut u, mut v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
+    let (t_min, t_max) = (t_min.to_array(), t_max.to_array());
+    for k in 0..8 {
+        if mask & (1 << k) == 0 {
+            continue;
+        }
+        let (ray, [p0, e1, e2]) = lane(k);
+        match refined(&ray, p0, e1, e2, t_min[k], t_max[k]) {
+            Some(hit) => (t[k], u[k], v[k]) = (hit.t, hit.u, hit.v),
+            None => mask &= !(1 << k),
+        }
+    }
+    *hits = TriangleHit8 {
+        hit: Mask8::from_bitmask(mask),
+        t: F32x8::from_array(t),
+        u: F32x8::from_array(u),
+        v: F32x8::from_array(v),
+    };
 }
 
 /// Eight lanes of [`TriangleHit`]: lane `i` hit when `hit` has it; `t`, `u` and `v` of a
@@ -137,27 +256,31 @@ pub fn triangle_packet(
         Vec3x8::splat(e1),
         Vec3x8::splat(e2),
         t_min,
-        t_max,
     );
     hits.hit = hits.hit & Mask8::from_bitmask(active);
+    refine_lanes(&mut hits, |k| (rays.rays[k], [p0, e1, e2]), t_min, t_max);
     hits
 }
 
 /// [`triangle`] for one ray against the eight triangles of a pack.
 #[inline]
 pub fn triangle_leaf(ray: &Ray, pack: &TrianglePack8, t_min: f32, t_max: f32) -> TriangleHit8 {
-    triangle_lanes(
+    let (t_min, t_max) = (F32x8::splat(t_min), F32x8::splat(t_max));
+    let mut hits = triangle_lanes(
         Vec3x8::splat(ray.origin),
         Vec3x8::splat(ray.dir),
         pack.p0,
         pack.e1,
         pack.e2,
-        F32x8::splat(t_min),
-        F32x8::splat(t_max),
-    )
+        t_min,
+    );
+    let triangle = |k| [pack.p0.lane(k), pack.e1.lane(k), pack.e2.lane(k)];
+    refine_lanes(&mut hits, |k| (*ray, triangle(k)), t_min, t_max);
+    hits
 }
 
-/// The body of [`triangle`], lane by lane, its early exits turned into a mask.
+/// The single-precision body of [`triangle`], lane by lane, its early exits turned into
+/// a mask: the candidates that [`refine_lanes`] confirms.
 #[inline(always)]
 fn triangle_lanes(
     origin: Vec3x8,
@@ -166,7 +289,6 @@ fn triangle_lanes(
     e1: Vec3x8,
     e2: Vec3x8,
     t_min: F32x8,
-    t_max: F32x8,
 ) -> TriangleHit8 {
     let (zero, one) = (F32x8::ZERO, F32x8::splat(1.0));
     let p = dir.cross(e2);
@@ -180,7 +302,7 @@ fn triangle_lanes(
     let v = dir.dot(q) * inv_det;
     hit = hit & v.ge(zero) & (u + v).le(one);
     let t = e2.dot(q) * inv_det;
-    hit = hit & t.gt(t_min) & t.lt(t_max);
+    hit = hit & t.gt(t_min);
     TriangleHit8 { hit, t, u, v }
 }
 

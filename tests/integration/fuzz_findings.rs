@@ -172,16 +172,15 @@ fn the_grid_walk_allows_for_where_cell_of_puts_a_boundary() {
     assert_eq!(grid.closest_packet(&packet), [expected; 8]);
 }
 
-/// Open, crash-4739cb5f1bda and crash-155181915153 (2026-11-30, over 5853abf), made
+/// crash-4739cb5f1bda and crash-155181915153 (2026-11-30, over 5853abf), made
 /// smaller: nine copies of a triangle in the plane x = 0 (within 1e-17) with a corner at
 /// (0, -1e9, -1e9), and a ray along x from (-1e9, -1e9, -1e9) to that corner. The
 /// triangle test gives t = 999984800, 15200 short of the plane: a hit before the
 /// triangle's own padded box (x within 1000 of 0). The midpoint BVH, 8 wide, then skips
 /// the leaves holding the other copies as `beyond` the first hit it finds, and returns
-/// another copy than brute force's tie rule (the first in the file). The triangle test's
-/// error from far away, the case that keeps triangles out of `tests/accel.rs`'s far rays.
+/// another copy than brute force's tie rule (the first in the file). Fixed in
+/// `intersect::triangle`: each hit is computed again in double precision, at 1e9.
 #[test]
-#[ignore = "open finding: a triangle's hit from 1e9 away lies before its own box"]
 fn identical_triangles_hit_from_1e9_away_tie_as_brute_force() {
     let triangle = "p 3 -0.000000000000000017741782 -0.00000000000000000006760319 \
                     -0.00000000000000000006760319 0.000000000000000000000000000000000000012638724 \
@@ -282,17 +281,16 @@ fn pointed_cone_is_hit_only_on_its_surface() {
     }
 }
 
-/// Open, found by `tests/accel.rs`'s property test on 2026-11-30 (present before that
+/// Found by `tests/accel.rs`'s property test on 2026-11-30 (present before that
 /// day's restructuring, which did not change it): a sliver triangle in the plane `y = 0`
 /// whose edges are parallel to within rounding (`|e1 x e2| / (|e1| |e2|)` is about 6e-8,
 /// below `f32::EPSILON`), so the reader does not store it as degenerate. Möller-Trumbore's
 /// determinant is then rounding noise, and the test reports a hit at `t = 2` where the
 /// ray is 0.09 off the plane, outside the triangle's padded box: brute force finds it, the
-/// structures, which trust the box, do not. Ignored until the triangle test or the
-/// reader's degeneracy rule is made robust to such slivers (which may change images of
-/// meshes that hold them, so it needs its own measurement).
+/// structures, which trust the box, do not. Fixed in `intersect::triangle`: the hit is
+/// computed again in double precision, where the sliver's determinant is exact, and
+/// stands only if it lies on the triangle there; the reader keeps such slivers.
 #[test]
-#[ignore = "open finding: near-degenerate triangles hit outside their box"]
 fn sliver_triangle_hits_only_inside_its_box() {
     use p3trace::accel::{AccelOptions, Tracer};
     use p3trace::ray::Ray;
