@@ -364,6 +364,18 @@ impl Vec3x8 {
     }
 }
 
+impl Add for Vec3x8 {
+    type Output = Vec3x8;
+    #[inline]
+    fn add(self, rhs: Self) -> Self {
+        Vec3x8 {
+            x: self.x + rhs.x,
+            y: self.y + rhs.y,
+            z: self.z + rhs.z,
+        }
+    }
+}
+
 impl Sub for Vec3x8 {
     type Output = Vec3x8;
     #[inline]

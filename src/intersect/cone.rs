@@ -22,6 +22,12 @@ use crate::simd::{F32x8, Mask8, Vec3x8};
 /// A point `P` lies on it when its distance from the axis equals
 /// `r(s) = r_base + k s`, `k = (r_apex - r_base) / height`, with `s = dot(P - base, axis)`
 /// in `[0, height]`: a quadratic in `t`, solved for both roots in order.
+///
+/// The quadratic is taken in the cone's own frame, as the sphere's is about its centre:
+/// from the ray's point nearest the middle of the axis, `t0` along it. From the ray's
+/// origin its coefficients would be about `t^2` (1e18 from 1e9 away), and their
+/// difference, the discriminant, rounding noise: a thin cone was hit by rays passing 2.5
+/// units off it. From there they are about the squares of the distances near the cone.
 #[allow(clippy::too_many_arguments)] // the cone's five fields, the ray and its interval
 pub fn cone(
     ray: &Ray,
@@ -34,7 +40,9 @@ pub fn cone(
     t_max: f32,
 ) -> Option<f32> {
     let slope = (r_apex - r_base) / height;
-    let offset = ray.origin - base;
+    let from_base = ray.origin - base;
+    let t0 = (axis * (0.5 * height) - from_base).dot(ray.dir);
+    let offset = from_base + t0 * ray.dir;
     let d_axial = ray.dir.dot(axis);
     let o_axial = offset.dot(axis);
     let d_perp = ray.dir - d_axial * axis;
@@ -44,32 +52,26 @@ pub fn cone(
     let half_b = o_perp.dot(d_perp) - slope * d_axial * r_origin;
     let c = o_perp.dot(o_perp) - r_origin * r_origin;
 
-    let on_surface = |t: f32| {
-        let s = o_axial + t * d_axial;
-        t > t_min && t < t_max && (0.0..=height).contains(&s)
+    // `t0 + dt` for a root `dt`, if the ray is then on the frustum and in the interval.
+    let on_surface = |dt: f32| {
+        let (s, t) = (o_axial + dt * d_axial, t0 + dt);
+        (t > t_min && t < t_max && (0.0..=height).contains(&s)).then_some(t)
     };
     // A ray parallel to the cone's side (or a cylinder's axis) leaves a linear equation.
     if a.abs() <= 1e-12 * max_num(d_perp.dot(d_perp), d_axial * d_axial) {
         if half_b == 0.0 {
             return None;
         }
-        let t = -c / (2.0 * half_b);
-        return on_surface(t).then_some(t);
+        return on_surface(-c / (2.0 * half_b));
     }
     let disc = half_b * half_b - a * c;
     if !(disc >= 0.0) {
         return None;
     }
     let root = disc.sqrt();
-    let (t0, t1) = ((-half_b - root) / a, (-half_b + root) / a);
-    let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
-    if on_surface(near) {
-        Some(near)
-    } else if on_surface(far) {
-        Some(far)
-    } else {
-        None
-    }
+    let (dt0, dt1) = ((-half_b - root) / a, (-half_b + root) / a);
+    let (near, far) = if dt0 <= dt1 { (dt0, dt1) } else { (dt1, dt0) };
+    on_surface(near).or_else(|| on_surface(far))
 }
 
 /// [`cone`] for eight rays against one cone; lanes outside `active` miss. Both the
@@ -91,7 +93,9 @@ pub fn cone_packet(
     let (slope, slope2) = (F32x8::splat(slope_f), F32x8::splat(slope_f * slope_f));
     let (axis, height) = (Vec3x8::splat(axis), F32x8::splat(height));
     let (origin, dir) = (rays.origin, rays.dir);
-    let offset = origin - Vec3x8::splat(base);
+    let from_base = origin - Vec3x8::splat(base);
+    let t0 = (axis.scale(F32x8::splat(0.5) * height) - from_base).dot(dir);
+    let offset = from_base + dir.scale(t0);
     let d_axial = dir.dot(axis);
     let o_axial = offset.dot(axis);
     let d_perp = dir - axis.scale(d_axial);
@@ -102,8 +106,9 @@ pub fn cone_packet(
     let half_b = o_perp.dot(d_perp) - slope * d_axial * r_origin;
     let c = o_perp.dot(o_perp) - r_origin * r_origin;
 
-    let on_surface = |t: F32x8| {
-        let s = o_axial + t * d_axial;
+    // As `cone`'s: whether `t0 + dt` is on the frustum and in the interval.
+    let on_surface = |dt: F32x8| {
+        let (s, t) = (o_axial + dt * d_axial, t0 + dt);
         t.gt(t_min) & t.lt(t_max) & zero.le(s) & s.le(height)
     };
     // Parallel to the side: the linear equation.
@@ -115,9 +120,9 @@ pub fn cone_packet(
     // Otherwise the quadratic, near root first.
     let disc = half_b * half_b - a * c;
     let root = disc.sqrt();
-    let (t0, t1) = ((-half_b - root) / a, (-half_b + root) / a);
-    let ordered = t0.le(t1);
-    let (near, far) = (ordered.select(t0, t1), ordered.select(t1, t0));
+    let (dt0, dt1) = ((-half_b - root) / a, (-half_b + root) / a);
+    let ordered = dt0.le(dt1);
+    let (near, far) = (ordered.select(dt0, dt1), ordered.select(dt1, dt0));
     let near_on = on_surface(near);
     let hit_quad = disc.ge(zero) & (near_on | on_surface(far));
     let t_quad = near_on.select(near, far);
@@ -125,7 +130,7 @@ pub fn cone_packet(
     let hit = (linear & hit_line) | hit_quad.and_not(linear);
     (
         hit & Mask8::from_bitmask(active),
-        linear.select(t_line, t_quad),
+        t0 + linear.select(t_line, t_quad),
     )
 }
 

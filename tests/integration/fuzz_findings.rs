@@ -214,15 +214,15 @@ fn the_bvh_finds_a_shadow_ray_from_1e9_away() {
     }
 }
 
-/// Open, crash-a68848753ac4 and crash-af490383dea1 (2026-12-01, over d0be412; the same
+/// crash-a68848753ac4 and crash-af490383dea1 (2026-12-01, over d0be412; the same
 /// at e39547c, before that session's changes, checked): a cone whose radii are below
 /// 1e-32 and whose axis keeps within half a unit of x = 0, and a ray straight down from
 /// 1e9 above a point 2.5 units or more off that axis. The cone's test
 /// reports a hit at t = 1e9, where the ray is nowhere near the cone: brute force finds it,
-/// the grid, which trusts the cone's box, does not. The cone test's error from far away
-/// (`docs/fuzzing.md`, open findings), which keeps cones out of `tests/accel.rs`'s far rays.
+/// the grid, which trusts the cone's box, does not. Fixed in `intersect::cone`, whose
+/// quadratic is now taken from the ray's point nearest the cone (its discriminant was
+/// the noise of two numbers of 1e18).
 #[test]
-#[ignore = "open finding: a cone's hit from 1e9 away lies far off the cone"]
 fn thin_cone_seen_from_1e9_away_is_missed() {
     let cases = [
         (
@@ -247,14 +247,15 @@ fn thin_cone_seen_from_1e9_away_is_missed() {
     }
 }
 
-/// Open, found by a measurement scene of 20,000 random cones (2026-12-01, while packing
+/// Found by a measurement scene of 20,000 random cones (2026-12-01, while packing
 /// BVH leaves; the same at 85afa97): a pointed cone seen from 30 units away, the ray
 /// passing 0.02 from its axis near the apex, where its radius is 0.00016. The cone test
 /// reports a hit there, off the cone and outside its box: brute force and the grid find
 /// it, and the 8-wide BVH finds it or not as the shape of its tree has the box that holds
-/// the cone also hold the point, so that scene's BVH image depends on the tree.
+/// the cone also hold the point, so that scene's BVH image depends on the tree. Fixed
+/// in `intersect::cone` (the quadratic in the cone's frame: from 30 units away its
+/// discriminant lost the 0.02 by which the ray misses).
 #[test]
-#[ignore = "open finding: a pointed cone's test hits off the cone near its apex"]
 fn pointed_cone_is_hit_only_on_its_surface() {
     let scene = parse_text("c\n8.0116 9.6824 2.9841 0.0696\n7.6587 10.0031 3.4615 0\n").unwrap();
     let cones = &scene.geometry.cones;
