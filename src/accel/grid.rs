@@ -19,7 +19,7 @@ use std::cell::RefCell;
 
 use glam::{IVec3, UVec3, Vec3};
 
-use super::bounds::prim_bounds;
+use super::bounds::{counted_hit, counted_hits8, prim_bounds};
 use super::hit::{for_lanes, test_packet, ClosestHit};
 use super::structure::Structure;
 use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay, RayQuery, RayQuery8};
@@ -62,12 +62,19 @@ impl Grid {
     /// The report's grid over the bounded primitives of `geometry`, `density` its `m`,
     /// moving spheres bounded over `shutter`; with `mailbox`, an object spanning several
     /// cells is tested once per ray.
-    pub fn build(geometry: &Geometry, density: f32, mailbox: bool, shutter: [f32; 2]) -> Grid {
+    /// Spheres' boxes are grown by `sphere_margin` (`bounds::prim_bounds`).
+    pub fn build(
+        geometry: &Geometry,
+        density: f32,
+        mailbox: bool,
+        shutter: [f32; 2],
+        sphere_margin: f32,
+    ) -> Grid {
         let mut prims = Vec::with_capacity(geometry.bounded_count());
         let mut boxes = Vec::with_capacity(geometry.bounded_count());
         for kind in PrimKind::BOUNDED {
             for prim in geometry.ids(kind) {
-                let b = prim_bounds(geometry, prim, shutter);
+                let b = prim_bounds(geometry, prim, shutter, sphere_margin);
                 if !b.is_empty() {
                     prims.push(prim);
                     boxes.push(b);
@@ -190,7 +197,7 @@ impl Structure for Grid {
             self.walk(query, t_max, |cell_refs, _| {
                 blocked = cell_refs.iter().any(|&r| {
                     mailbox.first_visit(r)
-                        && (geometry.intersect(self.prims[r as usize], query, t_max)).is_some()
+                        && counted_hit(geometry, self.prims[r as usize], query, t_max).is_some()
                 });
                 if blocked {
                     Walk::Stop
@@ -267,7 +274,7 @@ impl Structure for Grid {
                         let lane = query.lane(k);
                         let hit = self.cell_refs(cell).iter().any(|&r| {
                             let prim = self.prims[r as usize];
-                            geometry.intersect(prim, &lane, t_max[k]).is_some()
+                            counted_hit(geometry, prim, &lane, t_max[k]).is_some()
                         });
                         if hit {
                             blocked |= 1 << k;
@@ -281,7 +288,8 @@ impl Structure for Grid {
                         break;
                     }
                     let prim = self.prims[r as usize];
-                    let hits = geometry.intersect8(prim, query, F32x8::from_array(*t_max), open);
+                    let hits =
+                        counted_hits8(geometry, prim, query, F32x8::from_array(*t_max), open);
                     blocked |= hits.hit.bitmask() & open;
                 }
             });

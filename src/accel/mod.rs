@@ -28,7 +28,7 @@ mod structure;
 
 use std::time::{Duration, Instant};
 
-use crate::intersect::{IntersectOptions, RayQuery, RayQuery8};
+use crate::intersect::{IntersectOptions, RayQuery, RayQuery8, SphereRoots};
 use crate::prim::PrimKind;
 use crate::ray::{lane_mask, Hit, Ray, RayPacket};
 pub use crate::scene::AccelKind;
@@ -140,9 +140,11 @@ impl Accel {
                 options.grid_density,
                 options.mailbox,
                 options.shutter,
+                options.intersect.sphere_margin,
             )),
             AccelKind::Bvh => {
-                let bvh2 = Bvh2::build(geometry, options.bvh, options.shutter);
+                let margin = options.intersect.sphere_margin;
+                let bvh2 = Bvh2::build(geometry, options.bvh, options.shutter, margin);
                 match options.bvh_width.unwrap_or(default_width(options.bvh)) {
                     BvhWidth::Two => Accel::Bvh2(bvh2),
                     // A tree too large for the 8-wide encoding stays binary.
@@ -235,11 +237,25 @@ impl<'s> Tracer<'s> {
     /// primitives as `options.intersect` says.
     pub fn new(geometry: &'s Geometry, options: &AccelOptions) -> Self {
         let start = Instant::now();
-        let accel = Accel::build(geometry, options);
+        // The textbook roots' spheres are padded further (`bounds::textbook_margin`).
+        let intersect = IntersectOptions {
+            sphere_margin: match options.intersect.sphere_roots {
+                SphereRoots::Precise => 0.0,
+                SphereRoots::Textbook => bounds::textbook_margin(geometry),
+            },
+            ..options.intersect
+        };
+        let accel = Accel::build(
+            geometry,
+            &AccelOptions {
+                intersect,
+                ..*options
+            },
+        );
         Tracer {
             geometry,
             accel,
-            options: options.intersect,
+            options: intersect,
             build_time: start.elapsed(),
         }
     }

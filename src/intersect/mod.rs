@@ -100,10 +100,13 @@ pub trait Shapes {
 
 /// What a profile chooses in an intersection: the form of the sphere test's quadratic.
 /// Chosen where the tracer is built and handed to the kernels with each query (as
-/// Embree's per-query context), never kept with the geometry.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// Embree's per-query context), never kept with the geometry. With it goes how much
+/// further than rounding the structures pad a sphere's box (`accel::bounds`), which the
+/// tracer sets from the scene for the textbook roots.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct IntersectOptions {
     pub sphere_roots: SphereRoots,
+    pub sphere_margin: f32,
 }
 
 /// A kind whose primitives the 8-wide BVH stores side by side (`packed` in

@@ -205,6 +205,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         shutter: options.shutter,
         intersect: IntersectOptions {
             sphere_roots: options.shade.profile.sphere_roots(),
+            ..IntersectOptions::default()
         },
         ..options.accel
     };

@@ -68,14 +68,11 @@ fn point() -> impl Strategy<Value = [f32; 3]> {
     [coord(), coord(), coord()]
 }
 
-/// One primitive as P3F text: of every kind, or without `all_kinds` only the kinds whose
-/// own tests stay within their padded boxes for rays from far away (spheres, moving
-/// spheres, boxes). Triangles' and cones' tests from 1e9 away can report hits a unit off
-/// the ray, outside any box a structure holds them in (open, as the sliver triangle of
-/// `tests/fuzz_findings.rs`).
-fn primitive(all_kinds: bool) -> BoxedStrategy<String> {
+/// One primitive of any kind as P3F text, degenerate ones among them.
+fn primitive() -> BoxedStrategy<String> {
     let fmt = |p: [f32; 3]| format!("{} {} {}", p[0], p[1], p[2]);
-    let mut kinds = vec![
+    let radius = prop_oneof![Just(0.0f32), 0.0f32..1.0];
+    let kinds = vec![
         (point(), 0.0f32..1.5)
             .prop_map(move |(c, r)| format!("s {} {r}", fmt(c)))
             .boxed(),
@@ -89,44 +86,40 @@ fn primitive(all_kinds: bool) -> BoxedStrategy<String> {
                 format!("box {} {}", fmt(lo), fmt(hi))
             })
             .boxed(),
+        (point(), point(), point())
+            .prop_map(move |(a, b, c)| format!("p 3\n{}\n{}\n{}", fmt(a), fmt(b), fmt(c)))
+            .boxed(),
+        // Degenerate triangles: repeated vertices, collinear ones.
+        (point(), point())
+            .prop_map(move |(a, b)| format!("p 3\n{}\n{}\n{}", fmt(a), fmt(b), fmt(b)))
+            .boxed(),
+        (point(), point())
+            .prop_map(move |(a, b)| {
+                let m = [0, 1, 2].map(|k| (a[k] + b[k]) / 2.0);
+                format!("p 3\n{}\n{}\n{}", fmt(a), fmt(m), fmt(b))
+            })
+            .boxed(),
+        // Cones, pointed ones and segments (both radii 0) among them.
+        (point(), point(), radius.clone(), radius)
+            .prop_map(move |(a, b, ra, rb)| {
+                let b = if a == b { [b[0], b[1] + 1.0, b[2]] } else { b };
+                format!("c\n{} {ra}\n{} {rb}", fmt(a), fmt(b))
+            })
+            .boxed(),
     ];
-    if all_kinds {
-        kinds.extend([
-            (point(), point(), point())
-                .prop_map(move |(a, b, c)| format!("p 3\n{}\n{}\n{}", fmt(a), fmt(b), fmt(c)))
-                .boxed(),
-            // Degenerate triangles: repeated vertices, collinear ones.
-            (point(), point())
-                .prop_map(move |(a, b)| format!("p 3\n{}\n{}\n{}", fmt(a), fmt(b), fmt(b)))
-                .boxed(),
-            (point(), point())
-                .prop_map(move |(a, b)| {
-                    let m = [0, 1, 2].map(|k| (a[k] + b[k]) / 2.0);
-                    format!("p 3\n{}\n{}\n{}", fmt(a), fmt(m), fmt(b))
-                })
-                .boxed(),
-            (point(), point(), 0.0f32..1.0, 0.0f32..1.0)
-                .prop_map(move |(a, b, ra, rb)| {
-                    let b = if a == b { [b[0], b[1] + 1.0, b[2]] } else { b };
-                    format!("c\n{} {ra}\n{} {rb}", fmt(a), fmt(b))
-                })
-                .boxed(),
-        ]);
-    }
     proptest::strategy::Union::new(kinds).boxed()
 }
 
 /// A scene of random primitives, some of them exact copies of others (ties), and now
 /// and then a plane.
 fn scene() -> impl Strategy<Value = Scene> {
-    scene_of(true, false)
+    scene_of(false)
 }
 
-/// [`scene`], of every kind of primitive or of those [`primitive`] names, and with
-/// `giants` now and then a sphere of radius 1e6 or 1e9 whose surface passes among the
+/// [`scene`], with `giants` now and then a sphere of radius 1e6 or 1e9 whose surface passes among the
 /// others: it stretches the grid's cells to its size, where the grid's planes lie some
 /// 64 units from where `cell_of` puts them (fuzz finding crash-fb93a9574b59).
-fn scene_of(all_kinds: bool, giants: bool) -> impl Strategy<Value = Scene> {
+fn scene_of(giants: bool) -> impl Strategy<Value = Scene> {
     let giant = (point(), 0usize..6, prop::sample::select(vec![1e6f32, 1e9])).prop_map(
         |(p, axis, radius)| {
             let mut centre = Vec3::from_array(p);
@@ -140,7 +133,7 @@ fn scene_of(all_kinds: bool, giants: bool) -> impl Strategy<Value = Scene> {
         Just(None).boxed()
     };
     (
-        prop::collection::vec(primitive(all_kinds), 0..40),
+        prop::collection::vec(primitive(), 0..40),
         prop::collection::vec(any::<prop::sample::Index>(), 0..4),
         prop::option::of(point()),
         giant,
@@ -323,7 +316,7 @@ proptest! {
     /// 50 units apart at 1e9 in the wrong order and skipped a cell).
     #[test]
     fn rays_from_far_away_answer_as_brute_force(
-        scene in scene_of(false, true),
+        scene in scene_of(true),
         rays in prop::collection::vec(far_ray(), 8..=8),
     ) {
         let g = &scene.geometry;
@@ -370,6 +363,7 @@ fn the_tracers_sphere_roots_reach_every_kernel() {
         };
         let intersect = IntersectOptions {
             sphere_roots: roots,
+            ..IntersectOptions::default()
         };
         for options in structures()
             .into_iter()

@@ -221,7 +221,8 @@ fn the_bvh_finds_a_shadow_ray_from_1e9_away() {
 /// reports a hit at t = 1e9, where the ray is nowhere near the cone: brute force finds it,
 /// the grid, which trusts the cone's box, does not. Fixed in `intersect::cone`, whose
 /// quadratic is now taken from the ray's point nearest the cone (its discriminant was
-/// the noise of two numbers of 1e18).
+/// the noise of two numbers of 1e18), and by the structures' hit rule
+/// (`accel::bounds::admits`), which drops a cone's hit outside its box in every structure.
 #[test]
 fn thin_cone_seen_from_1e9_away_is_missed() {
     let cases = [
@@ -493,7 +494,7 @@ fn assert_agrees(finding: &Finding, profile: Profile) {
 }
 
 /// The standard profile gives one image of crash-37bf537fbff3's scene with brute force
-/// and the grid; the course profile's case is open (below).
+/// and the grid; so does the course profile (below).
 #[test]
 fn crash_37bf_agrees_with_the_standard_profile() {
     assert_agrees(&CRASH_37BF, Profile::Standard);
@@ -504,10 +505,12 @@ fn crash_37bf_agrees_with_the_standard_profile() {
 /// gives hit distances off by far more than the precise test's; brute force and the grid
 /// (packets) gave different images. The grid stopped at the first cell holding a hit
 /// without allowing for the rounding of where the next cells start; its walk now does
-/// (`accel::grid::Dda`), and the two agree. Still open: the BVH gives another image than
-/// brute force here with the course profile, which is why the test is ignored.
+/// (`accel::grid::Dda`), and the two agree. The BVH still gave another image: a textbook
+/// root lay outside the sphere's padded box, where brute force kept it and the tree did
+/// not look. Fixed by the structures' hit rule (`accel::bounds::admits`): a sphere's hit
+/// counts only inside its box's interval, in every structure, so all three agree (the
+/// same fix for crash-6c89, crash-c9e9, crash-81b9 and crash-8fc3, below).
 #[test]
-#[ignore = "open finding: with the course profile the BVH and brute force differ"]
 fn crash_37bf_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_37BF, Profile::Course);
 }
@@ -561,15 +564,14 @@ fn crash_156f_agrees_with_the_course_profile() {
 /// course profile one pixel differs: from depth 2 on, the grid and the BVH, in every mode,
 /// give one reflected ray's colour as 6.2e-6 where brute force gives 0 (traced by hand
 /// with the structures and modes side by side: the modes agree with each other, the
-/// structures with each other, not with brute force). The standard profile agrees. Not
-/// traced further.
+/// structures with each other, not with brute force). The standard profile agrees. The
+/// textbook roots' error, fixed by the hit rule (crash-37bf's course case, above).
 #[test]
 fn crash_6c89_agrees_with_the_standard_profile() {
     assert_agrees(&CRASH_6C89, Profile::Standard);
 }
 
 #[test]
-#[ignore = "open finding: with the course profile the structures and brute force differ"]
 fn crash_6c89_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_6C89, Profile::Course);
 }
@@ -609,10 +611,9 @@ fn crash_c9e9_agrees_with_the_standard_profile() {
 }
 
 /// With the course profile, brute force, the grid and the BVH give different images of
-/// crash-c9e9's scene; so they did before the session that found it (ca400d3), whose
-/// changes were to packet traversal and the grid's step, not to what either answers.
+/// crash-c9e9's scene; so they did before the session that found it (ca400d3). Fixed by
+/// the hit rule (crash-37bf's course case, above).
 #[test]
-#[ignore = "open finding: with the course profile the structures and brute force differ"]
 fn crash_c9e9_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_C9E9, Profile::Course);
 }
@@ -636,9 +637,8 @@ fn crash_81b9_agrees_with_the_standard_profile() {
 
 /// With the course profile (the textbook sphere roots, far off from 1e9 away) the grid
 /// and the BVH differ from brute force on crash-81b9's scene, as on crash-37bf's; so
-/// they did at ca400d3, before the changes of the session that found it.
+/// they did at ca400d3. Fixed by the hit rule (crash-37bf's course case, above).
 #[test]
-#[ignore = "open finding: with the course profile the structures and brute force differ"]
 fn crash_81b9_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_81B9, Profile::Course);
 }
@@ -666,9 +666,8 @@ fn crash_8fc3_agrees_with_the_standard_profile() {
 /// With the course profile the grid and the BVH (in either mode) differ from brute force
 /// on crash-8fc3's scene, as on crash-81b9's; brute force in stream mode gives its scalar
 /// image. The session that found it changed only the order of a stream's primary samples,
-/// which scalar mode does not have.
+/// which scalar mode does not have. Fixed by the hit rule (crash-37bf's course case).
 #[test]
-#[ignore = "open finding: with the course profile the structures and brute force differ"]
 fn crash_8fc3_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_8FC3, Profile::Course);
 }

@@ -413,7 +413,10 @@ proptest! {
             storage.radius.push(r);
             storage.material.push(0);
         }
-        let options = IntersectOptions { sphere_roots: roots };
+        let options = IntersectOptions {
+            sphere_roots: roots,
+            ..IntersectOptions::default()
+        };
         pack_equals_scalar("sphere pack", &storage, &ray, limits, &p, options);
     }
 

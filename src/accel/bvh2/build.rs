@@ -46,16 +46,18 @@ const UNUSED: Node = Node {
 };
 
 /// The nodes, depth first, and the primitives in leaf order, over every bounded
-/// primitive of `geometry` whose box (moving spheres over `shutter`) is not empty.
+/// primitive of `geometry` whose box (moving spheres over `shutter`, spheres grown by
+/// `sphere_margin`) is not empty.
 pub(super) fn build(
     geometry: &Geometry,
     build: BvhBuild,
     shutter: [f32; 2],
+    sphere_margin: f32,
 ) -> (Vec<Node>, Vec<PrimId>) {
     let mut items = Vec::with_capacity(geometry.bounded_count());
     for kind in PrimKind::BOUNDED {
         for prim in geometry.ids(kind) {
-            let bounds = prim_bounds(geometry, prim, shutter);
+            let bounds = prim_bounds(geometry, prim, shutter, sphere_margin);
             if !bounds.is_empty() {
                 items.push(Item { bounds, prim });
             }
@@ -297,7 +299,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            pool.install(|| Bvh2::build(&scene.geometry, BvhBuild::Sah, [0.0; 2]))
+            pool.install(|| Bvh2::build(&scene.geometry, BvhBuild::Sah, [0.0; 2], 0.0))
         };
         let (one, two) = (build(1), build(2));
         assert_eq!(one.nodes, two.nodes);

@@ -18,6 +18,7 @@ mod build;
 
 use glam::Vec3;
 
+use super::bounds::counted_hit;
 use super::hit::ClosestHit;
 use super::stack::Stack;
 use super::structure::Structure;
@@ -138,9 +139,14 @@ impl Bvh2Stats {
 
 impl Bvh2 {
     /// The tree over every bounded primitive of `geometry`, moving spheres bounded over
-    /// `shutter`.
-    pub fn build(geometry: &Geometry, build: BvhBuild, shutter: [f32; 2]) -> Bvh2 {
-        let (nodes, prims) = build::build(geometry, build, shutter);
+    /// `shutter`, spheres' boxes grown by `sphere_margin` (`bounds::prim_bounds`).
+    pub fn build(
+        geometry: &Geometry,
+        build: BvhBuild,
+        shutter: [f32; 2],
+        sphere_margin: f32,
+    ) -> Bvh2 {
+        let (nodes, prims) = build::build(geometry, build, shutter, sphere_margin);
         Bvh2 {
             nodes,
             prims,
@@ -229,7 +235,7 @@ impl Structure for Bvh2 {
                 let first = node.offset as usize;
                 let blocked = self.prims[first..first + node.count as usize]
                     .iter()
-                    .any(|&prim| geometry.intersect(prim, query, t_max).is_some());
+                    .any(|&prim| counted_hit(geometry, prim, query, t_max).is_some());
                 if blocked {
                     return true;
                 }

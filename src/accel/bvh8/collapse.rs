@@ -250,7 +250,7 @@ mod tests {
                 .collect();
             let scene = parse_text(&text).unwrap();
             for build in [BvhBuild::Sah, BvhBuild::Midpoint] {
-                let bvh2 = Bvh2::build(&scene.geometry, build, [0.0, 0.0]);
+                let bvh2 = Bvh2::build(&scene.geometry, build, [0.0, 0.0], 0.0);
                 let binary_depth = bvh2.depth();
                 let wide = Bvh8::collapse(bvh2, &scene.geometry).expect("small trees collapse");
                 wide.validate();

@@ -6,6 +6,7 @@
 
 use super::node::{leaf_parts, leaf_ref, pack_code, ChildRef};
 use super::packet::lanes_of;
+use crate::accel::bounds::admitted8;
 use crate::accel::hit::{for_lanes, ClosestHit};
 use crate::intersect::{LeafPack, RayQuery, RayQuery8};
 use crate::prim::{packed_kinds, PrimId, PrimKind};
@@ -39,13 +40,21 @@ impl<K: LeafPack> Packs<K> {
         self.packs.len() - 1
     }
 
-    /// Tests pack `index` against `query`, keeping the winner in `closest`.
+    /// Tests pack `index` against `query`, keeping the winner among the hits that count
+    /// (`accel::bounds::admits`) in `closest`.
     #[inline(always)]
-    fn closest(&self, index: usize, query: &RayQuery, closest: &mut ClosestHit) {
+    fn closest(
+        &self,
+        geometry: &Geometry,
+        index: usize,
+        query: &RayQuery,
+        closest: &mut ClosestHit,
+    ) {
         let hits = K::leaf(&self.packs[index], query, closest.bound());
-        let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
         let ids = &self.ids[index];
-        for_lanes(hits.hit.bitmask(), |k| {
+        let counted = admitted8(geometry, |k| ids[k], |_| *query, &hits);
+        let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
+        for_lanes(counted.bitmask(), |k| {
             closest.offer(Hit {
                 t: t[k],
                 prim: ids[k],
@@ -57,8 +66,10 @@ impl<K: LeafPack> Packs<K> {
 
     /// Whether a primitive of pack `index` blocks `query` within `(t_min, t_max)`.
     #[inline(always)]
-    fn blocks(&self, index: usize, query: &RayQuery, t_max: f32) -> bool {
-        K::leaf(&self.packs[index], query, t_max).hit.any()
+    fn blocks(&self, geometry: &Geometry, index: usize, query: &RayQuery, t_max: f32) -> bool {
+        let hits = K::leaf(&self.packs[index], query, t_max);
+        let ids = &self.ids[index];
+        admitted8(geometry, |k| ids[k], |_| *query, &hits).any()
     }
 
     /// The primitives of pack `index`, which holds `count`, against the lanes `lanes`
@@ -71,6 +82,7 @@ impl<K: LeafPack> Packs<K> {
     #[inline(never)]
     fn closest_packet(
         &self,
+        geometry: &Geometry,
         (index, count): (usize, usize),
         query: &RayQuery8,
         lanes: u8,
@@ -80,7 +92,7 @@ impl<K: LeafPack> Packs<K> {
         let mut bound = lanes_of(closest, ClosestHit::bound);
         for (slot, &prim) in ids.iter().enumerate().take(count) {
             let hits = K::slot8(pack, slot, query, bound, lanes);
-            let hit = hits.hit.bitmask();
+            let hit = admitted8(geometry, |_| prim, |k| query.lane(k), &hits).bitmask();
             if hit != 0 {
                 let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
                 for_lanes(hit, |k| {
@@ -99,14 +111,20 @@ impl<K: LeafPack> Packs<K> {
     /// The lanes of `lanes` that a primitive of pack `index`, which holds `count`,
     /// blocks within the packet's interval, one primitive against every lane at a time.
     #[inline(never)]
-    fn blocks_packet(&self, (index, count): (usize, usize), query: &RayQuery8, lanes: u8) -> u8 {
-        let pack = &self.packs[index];
+    fn blocks_packet(
+        &self,
+        geometry: &Geometry,
+        (index, count): (usize, usize),
+        query: &RayQuery8,
+        lanes: u8,
+    ) -> u8 {
+        let (pack, ids) = (&self.packs[index], &self.ids[index]);
         let t_max = F32x8::from_array(query.packet.t_max);
         let mut blocked = 0;
-        for slot in 0..count {
+        for (slot, &prim) in ids.iter().enumerate().take(count) {
             let open = lanes & !blocked;
             let hits = K::slot8(pack, slot, query, t_max, open);
-            blocked |= hits.hit.bitmask();
+            blocked |= admitted8(geometry, |_| prim, |k| query.lane(k), &hits).bitmask();
             if blocked == lanes {
                 break;
             }
@@ -159,11 +177,17 @@ macro_rules! define_leaves {
             /// Tests the pack of the leaf `child` against `query`, keeping the winner in
             /// `closest`; `false` when `child` holds no pack (a run of primitives).
             #[inline(always)]
-            pub fn closest(&self, child: ChildRef, query: &RayQuery, closest: &mut ClosestHit) -> bool {
+            pub fn closest(
+                &self,
+                geometry: &Geometry,
+                child: ChildRef,
+                query: &RayQuery,
+                closest: &mut ClosestHit,
+            ) -> bool {
                 let (code, _, index) = leaf_parts(child);
                 match code {
                     $(c if c == const { pack_code(PrimKind::$kind) } => {
-                        self.$field.closest(index, query, closest);
+                        self.$field.closest(geometry, index, query, closest);
                         true
                     })*
                     _ => false,
@@ -173,11 +197,17 @@ macro_rules! define_leaves {
             /// Whether a primitive of the pack of the leaf `child` blocks `query` within
             /// `(t_min, t_max)`; `None` when `child` holds no pack.
             #[inline(always)]
-            pub fn blocks(&self, child: ChildRef, query: &RayQuery, t_max: f32) -> Option<bool> {
+            pub fn blocks(
+                &self,
+                geometry: &Geometry,
+                child: ChildRef,
+                query: &RayQuery,
+                t_max: f32,
+            ) -> Option<bool> {
                 let (code, _, index) = leaf_parts(child);
                 match code {
                     $(c if c == const { pack_code(PrimKind::$kind) } => {
-                        Some(self.$field.blocks(index, query, t_max))
+                        Some(self.$field.blocks(geometry, index, query, t_max))
                     })*
                     _ => None,
                 }
@@ -191,6 +221,7 @@ macro_rules! define_leaves {
             #[inline(always)]
             pub fn closest_packet(
                 &self,
+                geometry: &Geometry,
                 child: ChildRef,
                 query: &RayQuery8,
                 lanes: u8,
@@ -200,7 +231,7 @@ macro_rules! define_leaves {
                 let fewer = count < lanes.count_ones() as usize;
                 match code {
                     $(c if fewer && c == const { pack_code(PrimKind::$kind) } => {
-                        self.$field.closest_packet((index, count), query, lanes, closest);
+                        self.$field.closest_packet(geometry, (index, count), query, lanes, closest);
                         true
                     })*
                     _ => false,
@@ -212,12 +243,18 @@ macro_rules! define_leaves {
             /// has lanes (as [`Leaves::closest_packet`]); `None` otherwise, the lanes left
             /// untested.
             #[inline(always)]
-            pub fn blocks_packet(&self, child: ChildRef, query: &RayQuery8, lanes: u8) -> Option<u8> {
+            pub fn blocks_packet(
+                &self,
+                geometry: &Geometry,
+                child: ChildRef,
+                query: &RayQuery8,
+                lanes: u8,
+            ) -> Option<u8> {
                 let (code, count, index) = leaf_parts(child);
                 let fewer = count < lanes.count_ones() as usize;
                 match code {
                     $(c if fewer && c == const { pack_code(PrimKind::$kind) } => {
-                        Some(self.$field.blocks_packet((index, count), query, lanes))
+                        Some(self.$field.blocks_packet(geometry, (index, count), query, lanes))
                     })*
                     _ => None,
                 }
