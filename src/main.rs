@@ -19,6 +19,7 @@ use p3trace::accel::{AccelOptions, Tracer};
 use p3trace::compare::levels;
 use p3trace::farm::{self, Canvas};
 use p3trace::generate::{dragon, mountain, random, skybox, sphereflake};
+use p3trace::intersect::IntersectOptions;
 use p3trace::plural::{count, noun};
 use p3trace::prim::PrimKind;
 use p3trace::render::film::{Film, OutputFormat, Placement};
@@ -444,7 +445,8 @@ fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
     println!("accel (file): {accel}");
     println!("spp (file): {}", scene.spp);
     // The structure as `render` builds it: over positions in the profile's frame, moving
-    // spheres bounded over the scene's default shutter.
+    // spheres bounded over the scene's default shutter, spheres padded for the profile's
+    // roots.
     let frame = args.profile.frame();
     let rendered = (frame != Frame::File)
         .then(|| read_scene(&args.scene, args.seed, frame))
@@ -452,6 +454,10 @@ fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
     let rendered = rendered.as_ref().unwrap_or(&scene);
     let options = AccelOptions {
         shutter: RenderOptions::from_scene(rendered).shutter,
+        intersect: IntersectOptions {
+            sphere_roots: args.profile.sphere_roots(),
+            ..IntersectOptions::default()
+        },
         ..args.accel.options(rendered.accel)
     };
     let structure = Tracer::new(&rendered.geometry, &options);
