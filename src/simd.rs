@@ -352,6 +352,42 @@ impl Vec3x8 {
         }
     }
 
+    /// [`F32x8::min`] per component, as glam's `Vec3::min`.
+    #[inline]
+    pub fn min(self, rhs: Self) -> Self {
+        Vec3x8 {
+            x: self.x.min(rhs.x),
+            y: self.y.min(rhs.y),
+            z: self.z.min(rhs.z),
+        }
+    }
+
+    /// [`F32x8::max`] per component, as glam's `Vec3::max`.
+    #[inline]
+    pub fn max(self, rhs: Self) -> Self {
+        Vec3x8 {
+            x: self.x.max(rhs.x),
+            y: self.y.max(rhs.y),
+            z: self.z.max(rhs.z),
+        }
+    }
+
+    /// `abs` per component, as glam's `Vec3::abs`.
+    #[inline]
+    pub fn abs(self) -> Self {
+        Vec3x8 {
+            x: self.x.abs(),
+            y: self.y.abs(),
+            z: self.z.abs(),
+        }
+    }
+
+    /// The lanes whose three components are finite, as glam's `Vec3::is_finite`.
+    #[inline]
+    pub fn is_finite(self) -> Mask8 {
+        self.x.is_finite() & self.y.is_finite() & self.z.is_finite()
+    }
+
     /// `1 / v` per component, as glam's `Vec3::recip`.
     #[inline]
     pub fn recip(self) -> Self {

@@ -19,7 +19,7 @@ use std::cell::RefCell;
 
 use glam::{IVec3, UVec3, Vec3};
 
-use super::bounds::{counted_hit, counted_hits8, prim_bounds};
+use super::bounds::prim_bounds;
 use super::hit::{for_lanes, test_packet, ClosestHit};
 use super::structure::Structure;
 use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay, RayQuery, RayQuery8};
@@ -197,7 +197,9 @@ impl Structure for Grid {
             self.walk(query, t_max, |cell_refs, _| {
                 blocked = cell_refs.iter().any(|&r| {
                     mailbox.first_visit(r)
-                        && counted_hit(geometry, self.prims[r as usize], query, t_max).is_some()
+                        && geometry
+                            .intersect(self.prims[r as usize], query, t_max)
+                            .is_some()
                 });
                 if blocked {
                     Walk::Stop
@@ -274,7 +276,7 @@ impl Structure for Grid {
                         let lane = query.lane(k);
                         let hit = self.cell_refs(cell).iter().any(|&r| {
                             let prim = self.prims[r as usize];
-                            counted_hit(geometry, prim, &lane, t_max[k]).is_some()
+                            geometry.intersect(prim, &lane, t_max[k]).is_some()
                         });
                         if hit {
                             blocked |= 1 << k;
@@ -288,8 +290,7 @@ impl Structure for Grid {
                         break;
                     }
                     let prim = self.prims[r as usize];
-                    let hits =
-                        counted_hits8(geometry, prim, query, F32x8::from_array(*t_max), open);
+                    let hits = geometry.intersect8(prim, query, F32x8::from_array(*t_max), open);
                     blocked |= hits.hit.bitmask() & open;
                 }
             });

@@ -1,9 +1,6 @@
 //! The closest-hit rule every structure keeps: the smallest `t`, and at equal `t` the
 //! smallest [`PrimId`], whatever order the primitives are tested in.
 
-#[cfg(doc)]
-use super::bounds::admits;
-use super::bounds::{counted_hit, counted_hits8};
 use crate::intersect::{RayQuery, RayQuery8};
 use crate::prim::PrimId;
 use crate::ray::Hit;
@@ -61,9 +58,9 @@ impl ClosestHit {
         }
     }
 
-    /// Tests `prim` and keeps its hit if it counts ([`admits`]) and wins.
+    /// Tests `prim` and keeps its hit if it wins.
     pub fn test(&mut self, geometry: &Geometry, prim: PrimId, query: &RayQuery) {
-        if let Some(h) = counted_hit(geometry, prim, query, self.bound()) {
+        if let Some(h) = geometry.intersect(prim, query, self.bound()) {
             self.offer(Hit {
                 t: h.t,
                 prim,
@@ -76,7 +73,7 @@ impl ClosestHit {
 
 /// [`ClosestHit::test`] for the lanes `lanes` of `query`'s packet: `prim` against all of
 /// them at once by its packet kernel, each lane within its own bound, and each lane's hit
-/// that counts offered to its closest hit.
+/// offered to its closest hit.
 pub fn test_packet(
     closest: &mut [ClosestHit; 8],
     geometry: &Geometry,
@@ -85,7 +82,7 @@ pub fn test_packet(
     lanes: u8,
 ) {
     let bounds = F32x8::from_array(closest.each_ref().map(ClosestHit::bound));
-    let hits = counted_hits8(geometry, prim, query, bounds, lanes);
+    let hits = geometry.intersect8(prim, query, bounds, lanes);
     let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
     for_lanes(hits.hit.bitmask() & lanes, |k| {
         closest[k].offer(Hit {

@@ -1,6 +1,5 @@
 //! Brute force: every bounded primitive is tested against every ray.
 
-use super::bounds::counted_hit;
 use super::hit::ClosestHit;
 use super::structure::Structure;
 use crate::intersect::RayQuery;
@@ -24,7 +23,7 @@ impl Structure for BruteForce {
         PrimKind::BOUNDED.iter().any(|&kind| {
             geometry
                 .ids(kind)
-                .any(|prim| counted_hit(geometry, prim, query, t_max).is_some())
+                .any(|prim| geometry.intersect(prim, query, t_max).is_some())
         })
     }
 }

@@ -10,8 +10,8 @@
 use glam::Vec3;
 
 use super::{
-    gamma, max_num, Aabb, RayQuery, RayQuery8, Shapes, SurfacePoint, TriangleHit, TriangleHit8,
-    Vec3s,
+    gamma, max_num, trusted_box, Aabb, RayQuery, RayQuery8, Shapes, SurfacePoint, TriangleHit,
+    TriangleHit8, Vec3s,
 };
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
@@ -176,17 +176,23 @@ impl Shapes for Cones {
     fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
         let (base, axis, height) = (self.base.get(i), self.axis.get(i), self.height[i]);
         let (r_base, r_apex, t_min) = (self.r_base[i], self.r_apex[i], query.t_min);
-        cone(&query.ray, base, axis, height, r_base, r_apex, t_min, t_max).map(TriangleHit::at)
+        cone(&query.ray, base, axis, height, r_base, r_apex, t_min, t_max)
+            .filter(|&t| query.holds(trusted_box(self.bounds(i, [0.0; 2]), 0.0), t))
+            .map(TriangleHit::at)
     }
 
     fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
         let (base, axis, height) = (self.base.get(i), self.axis.get(i), self.height[i]);
         let (r_base, r_apex, t_min) = (self.r_base[i], self.r_apex[i], query.t_min8());
         let rays = query.packet;
-        let hits = cone_packet(
+        let (hit, t) = cone_packet(
             rays, base, axis, height, r_base, r_apex, t_min, t_max, active,
         );
-        TriangleHit8::at(hits)
+        if hit.none() {
+            return TriangleHit8::at((hit, t));
+        }
+        let trusted = trusted_box(self.bounds(i, [0.0; 2]), 0.0);
+        TriangleHit8::at((hit & query.holds(trusted, t), t))
     }
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {

@@ -151,6 +151,22 @@ impl BoxRay {
         (entry <= exit).then_some((entry, exit))
     }
 
+    /// Whether a hit at `t` lies where the structures look for it in the box `[min,
+    /// max]`: in its interval from `t_min` on, as [`BoxRay::interval`] computes it, and
+    /// its entry not [`beyond`] `t`. Every box above it in a structure holds it, so a
+    /// structure enters every such box before its closest hit (`accel::bounds`).
+    #[inline]
+    pub fn holds(&self, min: Vec3, max: Vec3, t_min: f32, t: f32) -> bool {
+        self.interval(min, max, t_min, f32::INFINITY)
+            .is_some_and(|(entry, exit)| !beyond(entry, t) && t <= exit)
+    }
+
+    /// [`BoxRay::holds`] for the eight boxes of `boxes`, lane `k` with the hit `t[k]`.
+    #[inline]
+    pub fn holds8(&self, boxes: &BoxPack8, t_min: f32, t: F32x8) -> Mask8 {
+        self.intervals8(boxes, t_min, f32::INFINITY).holds(t)
+    }
+
     /// [`BoxRay::interval`] against the eight boxes of a pack (the children of an
     /// eight-wide node), every lane. No box value is inert here (NaN corners are a slab
     /// ignored), so the caller masks out the padding with the lanes it asks about.
@@ -190,6 +206,14 @@ impl BoxRay8 {
                 z: clamp(inv.z),
             },
         }
+    }
+
+    /// [`BoxRay::holds`] for each ray against the box `[min, max]`, lane `k` with its
+    /// own `t_min` and hit `t`.
+    #[inline]
+    pub fn holds(&self, min: Vec3, max: Vec3, t_min: F32x8, t: F32x8) -> Mask8 {
+        self.interval(min, max, t_min, F32x8::splat(f32::INFINITY))
+            .holds(t)
     }
 
     /// The lanes `lanes` as one [`RayRange`], if their directions agree in sign.
@@ -336,6 +360,14 @@ pub struct Intervals8 {
     pub hit: Mask8,
     pub entry: F32x8,
     pub exit: F32x8,
+}
+
+impl Intervals8 {
+    /// The rule of [`BoxRay::holds`] lane by lane: the hit `t[k]` lies in interval `k`.
+    #[inline(always)]
+    fn holds(&self, t: F32x8) -> Mask8 {
+        (self.hit & t.le(self.exit)).and_not(beyond8(self.entry, t))
+    }
 }
 
 /// The operands of [`BoxRay::interval`], lane by lane.

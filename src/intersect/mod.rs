@@ -30,7 +30,7 @@ mod sphere;
 mod triangle;
 
 pub use aabb::{aabb, aabb_leaf, aabb_normal, aabb_packet, BoxPack8, Boxes};
-pub use bounds::Aabb;
+pub use bounds::{trusted_box, Aabb};
 pub use cone::{cone, cone_normal, cone_packet, Cones};
 pub use interval::{
     beyond, beyond8, widen_entry, widen_exit, BoxRay, BoxRay8, Intervals8, RayRange,
@@ -154,6 +154,22 @@ impl RayQuery {
             options,
         }
     }
+
+    /// Whether the hit at `t` lies in the trusted box `bounds` ([`trusted_box`]), by the
+    /// structures' box test ([`BoxRay::holds`]): the rule every routine's hits keep.
+    #[inline]
+    pub fn holds(&self, bounds: Option<Aabb>, t: f32) -> bool {
+        bounds.is_some_and(|b| {
+            BoxRay::new(self.ray.origin, self.inv_dir).holds(b.min, b.max, self.t_min, t)
+        })
+    }
+
+    /// [`RayQuery::holds`] for the eight boxes of a pack (as [`BoxPack8::trusted`] gives
+    /// them, with the lanes that have one), lane `k` with the hit `t[k]`.
+    #[inline(always)]
+    pub fn holds8(&self, (boxes, some): (BoxPack8, Mask8), t: F32x8) -> Mask8 {
+        some & BoxRay::new(self.ray.origin, self.inv_dir).holds8(&boxes, self.t_min, t)
+    }
 }
 
 /// [`RayQuery`] for eight rays: a packet (its lanes' `1 / dir`, the start of their
@@ -175,6 +191,14 @@ impl RayQuery8<'_> {
             t_min: self.packet.t_min,
             options: self.options,
         }
+    }
+
+    /// [`RayQuery::holds`] for each lane, lane `k` with the hit `t[k]`.
+    #[inline]
+    pub fn holds(&self, bounds: Option<Aabb>, t: F32x8) -> Mask8 {
+        bounds.map_or(Mask8::from_bitmask(0), |b| {
+            BoxRay8::new(self.packet).holds(b.min, b.max, self.t_min8(), t)
+        })
     }
 
     /// The start of every lane's interval, as the packet kernels take it.

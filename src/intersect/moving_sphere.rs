@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use super::sphere::{sphere, sphere_bounds, sphere_surface_point};
+use super::sphere::{sphere, sphere_bounds, sphere_surface_point, trusted_sphere_box};
 use super::{Aabb, RayQuery, Shapes, SurfacePoint, TriangleHit, Vec3s};
 use crate::ray::Ray;
 
@@ -46,7 +46,11 @@ impl Shapes for MovingSpheres {
     fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
         let (ray, radius) = (&query.ray, self.radius[i]);
         let centre = self.centre_at(i, ray.time);
-        sphere(ray, centre, radius, query.t_min, t_max).map(TriangleHit::at)
+        // The box at the ray's time lies in the structures' box over any shutter that
+        // holds the time: the centre moves monotonically, and the margin grows with it.
+        sphere(ray, centre, radius, query.t_min, t_max)
+            .filter(|&t| query.holds(trusted_sphere_box(centre, radius, query.options), t))
+            .map(TriangleHit::at)
     }
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, time: f32) -> Vec3 {

@@ -6,8 +6,8 @@ use glam::Vec3;
 
 use super::{first_root_in, first_root_in8};
 use super::{
-    gamma, Aabb, LeafPack, RayQuery, RayQuery8, Shapes, SurfacePoint, TriangleHit, TriangleHit8,
-    Vec3s,
+    gamma, trusted_box, Aabb, BoxPack8, IntersectOptions, LeafPack, RayQuery, RayQuery8, Shapes,
+    SurfacePoint, TriangleHit, TriangleHit8, Vec3s,
 };
 
 use crate::ray::{Ray, RayPacket};
@@ -207,10 +207,21 @@ impl LeafPack for Spheres {
         SpherePack8::new(&spheres)
     }
 
-    #[inline]
+    /// The kernel's hits that lie in their sphere's trusted box (as [`Shapes::intersect`]).
+    #[inline(always)]
     fn leaf(pack: &SpherePack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
         let roots = query.options.sphere_roots;
-        TriangleHit8::at(sphere_leaf(&query.ray, pack, roots, query.t_min, t_max))
+        let (hit, t) = sphere_leaf(&query.ray, pack, roots, query.t_min, t_max);
+        if hit.none() {
+            return TriangleHit8::at((hit, t));
+        }
+        let reach = Vec3x8::splat(Vec3::ONE).scale(pack.radius.abs());
+        let tight = BoxPack8 {
+            min: pack.centre - reach,
+            max: pack.centre + reach,
+        };
+        let trusted = tight.trusted(query.options.sphere_margin);
+        TriangleHit8::at((hit & query.holds8(trusted, t), t))
     }
 
     #[inline(always)]
@@ -231,9 +242,23 @@ impl LeafPack for Spheres {
 #[inline(always)]
 fn sphere8(query: &RayQuery8, centre: Vec3, radius: f32, t_max: F32x8, active: u8) -> TriangleHit8 {
     let (rays, roots, t_min) = (query.packet, query.options.sphere_roots, query.t_min8());
-    TriangleHit8::at(sphere_packet(
-        rays, centre, radius, roots, t_min, t_max, active,
-    ))
+    let (hit, t) = sphere_packet(rays, centre, radius, roots, t_min, t_max, active);
+    if hit.none() {
+        return TriangleHit8::at((hit, t));
+    }
+    let trusted = trusted_sphere_box(centre, radius, query.options);
+    TriangleHit8::at((hit & query.holds(trusted, t), t))
+}
+
+/// The box the structures hold a sphere in, with the margin of the profile's roots: its
+/// hits count only inside it (`intersect::bounds`).
+#[inline]
+pub(super) fn trusted_sphere_box(
+    centre: Vec3,
+    radius: f32,
+    options: IntersectOptions,
+) -> Option<Aabb> {
+    trusted_box(sphere_bounds(centre, radius), options.sphere_margin)
 }
 
 /// [`Shapes::surface_point`] of a sphere. The hit's offset from the centre is taken as
@@ -291,6 +316,7 @@ impl Shapes for Spheres {
             SphereRoots::Precise => sphere(ray, centre, radius, t_min, t_max),
             SphereRoots::Textbook => sphere_textbook(ray, centre, radius, t_min, t_max),
         }
+        .filter(|&t| query.holds(trusted_sphere_box(centre, radius, query.options), t))
         .map(TriangleHit::at)
     }
 

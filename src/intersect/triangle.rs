@@ -2,27 +2,31 @@
 //! normals), Möller-Trumbore and its SIMD twins (eight rays against one triangle; one ray
 //! against a [`TrianglePack8`] of a BVH leaf).
 //!
-//! **Precision.** Single-precision Möller-Trumbore finds candidates; each hit it reports
-//! is computed again in double precision from the same inputs ([`refined`]), and stands
-//! only if that finds it too. Single precision fails in two ways that double precision
-//! does not: a sliver's determinant (edges parallel to within rounding) is noise, so `u`,
-//! `v` and `t` are too (a hit 0.09 off the plane); and from 1e9 away `t` keeps only the
-//! digits that `e2 . ((o - p0) x e1)` leaves (15,200 short of the plane). The products of
-//! single-precision numbers are exact in double precision, so the determinant, `u`, `v`
-//! and `t` are those of the triangle as stored, to a few roundings of doubles; `t` is then
-//! within an ulp or two of the distance to a point of the triangle, inside its padded box.
-//! The recomputation runs only on the lanes that hit (a few per ray), in scalar code
-//! shared by every twin, so each lane stays the scalar answer bit for bit. Only it
-//! compares `t` with `t_max`: a single-precision `t` can lie beyond a bound (the closest
-//! hit so far, in a structure) that the double-precision one ties, and the answer would
-//! then depend on the order the primitives are tested in. A watertight
-//! test (Woop, Benthin and Wald 2013) would also close the cracks along shared edges, but
-//! wants the three vertices stored and its shear per ray; cracks are not what the
-//! findings are, and the storage stays Möller-Trumbore's.
+//! **Precision.** A hit stands only inside the triangle's trusted box (the box the
+//! structures hold it in, `intersect::trusted_box`), by the structures' own box test
+//! ([`RayQuery::holds`]): then every structure finds it (`accel::bounds`). Single-precision
+//! Möller-Trumbore's hit almost always lies there. It fails in two ways: a sliver's
+//! determinant (edges parallel to within rounding) is noise, so `u`, `v` and `t` are too
+//! (a hit 0.09 off the plane); and from 1e9 away `t` keeps only the digits that
+//! `e2 . ((o - p0) x e1)` leaves (15,200 short of the plane). Such a hit is computed again
+//! in double precision from the same inputs ([`refined`]) and stands if that one lies in
+//! the box. The products of single-precision numbers are exact in double precision, so
+//! the determinant, `u`, `v` and `t` are those of the triangle as stored, to a few
+//! roundings of doubles. Whether a hit is recomputed depends on the ray and the triangle
+//! alone, never on `t_max`, so the answer does not depend on the order a structure tests
+//! primitives in. The box test runs eight lanes at a time on the packs that single
+//! precision hits, and the recomputation in scalar code shared by every twin, so each
+//! lane stays the scalar answer bit for bit. A watertight test (Woop, Benthin and Wald
+//! 2013) would also close the cracks along shared edges, but wants the three vertices
+//! stored and its shear per ray, and from 1e9 away its `t` loses the same digits; cracks
+//! are not what the findings are, and the storage stays Möller-Trumbore's.
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 
-use super::{gamma, Aabb, LeafPack, RayQuery, RayQuery8, Shapes, SurfacePoint, Vec3s};
+use super::{
+    gamma, trusted_box, Aabb, BoxPack8, BoxRay8, IntersectOptions, LeafPack, RayQuery, RayQuery8,
+    Shapes, SurfacePoint, Vec3s,
+};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -44,7 +48,8 @@ impl TriangleHit {
 
 /// Möller-Trumbore test against the triangle `p0, p0 + e1, p0 + e2`. Two-sided; edges and
 /// vertices count as inside. A triangle with zero edges (how the scene stores degenerate
-/// ones) has a zero determinant and is never hit. A hit is the double-precision one (the
+/// ones) has a zero determinant and is never hit. A hit lies in the triangle's box as the
+/// structures hold it, single precision's where it does, else double precision's (the
 /// module's comment).
 pub fn triangle(
     ray: &Ray,
@@ -74,7 +79,31 @@ pub fn triangle(
     if !(t > t_min) {
         return None;
     }
+    if in_trusted_box(ray, [p0, e1, e2], t_min, t) {
+        return (t < t_max).then_some(TriangleHit { t, u, v });
+    }
     refined(ray, p0, e1, e2, t_min, t_max)
+        .filter(|hit| in_trusted_box(ray, [p0, e1, e2], t_min, hit.t))
+}
+
+/// The box of the corners of `p0, e1, e2`, as [`Triangles`] bounds it for the structures;
+/// `None` unless the corners are finite.
+#[inline]
+fn corner_box([p0, e1, e2]: [Vec3; 3]) -> Option<Aabb> {
+    let (a, b) = (p0 + e1, p0 + e2);
+    (p0.is_finite() && a.is_finite() && b.is_finite()).then(|| Aabb {
+        min: p0.min(a).min(b),
+        max: p0.max(a).max(b),
+    })
+}
+
+/// Whether the hit at `t` of the triangle `p0, e1, e2` lies where the structures look for
+/// it: in its trusted box, by their box test ([`RayQuery::holds`]).
+#[inline(never)]
+fn in_trusted_box(ray: &Ray, triangle: [Vec3; 3], t_min: f32, t: f32) -> bool {
+    let query = RayQuery::new(ray, t_min, IntersectOptions::default());
+    let trusted = corner_box(triangle).and_then(|tight| trusted_box(tight, 0.0));
+    query.holds(trusted, t)
 }
 
 /// Möller-Trumbore in double precision from the single-precision inputs: the hit of a
@@ -92,12 +121,7 @@ fn refined(ray: &Ray, p0: Vec3, e1: Vec3, e2: Vec3, t_min: f32, t_max: f32) -> O
     let u = s.dot(p) / det;
     let q = s.cross(e1);
     let v = dir.dot(q) / det;
-    // Single precision decided that the ray is inside; within its error bound of the
-    // edges double precision keeps that decision, so that two triangles sharing an
-    // edge leave no crack between them that single precision did not.
-    let (err_u, err_v) = single_precision_error(dir, e1, e2, s, det, u, v);
-    let (tol_u, tol_v) = (err_u.min(MAX_EDGE_TOLERANCE), err_v.min(MAX_EDGE_TOLERANCE));
-    if !(u >= -tol_u && v >= -tol_v && u + v <= 1.0 + tol_u + tol_v) {
+    if !(u >= 0.0 && v >= 0.0 && u + v <= 1.0) {
         return None;
     }
     let t = (e2.dot(q) / det) as f32;
@@ -105,65 +129,46 @@ fn refined(ray: &Ray, p0: Vec3, e1: Vec3, e2: Vec3, t_min: f32, t_max: f32) -> O
     (t > t_min && t < t_max).then_some(TriangleHit { t, u, v })
 }
 
-/// The most that [`refined`] lets a hit lie outside the triangle, in barycentrics, where
-/// single precision's decision is within its error bound of an edge: beyond it (a
-/// sliver, a small triangle from 1e9 away) that decision is noise, and double
-/// precision's stands.
-const MAX_EDGE_TOLERANCE: f64 = 1.0 / 1024.0;
-
-/// Bounds of the errors of single precision's `u` and `v` (`triangle_lanes`), from the
-/// magnitudes of their terms (as pbrt bounds its sums): `u = (s . p) / det` and
-/// `v = (d . (s x e1)) / det`, `p = d x e2`, `det = e1 . p`, each term rounded a few times.
-fn single_precision_error(
-    dir: DVec3,
-    e1: DVec3,
-    e2: DVec3,
-    s: DVec3,
-    det: f64,
-    u: f64,
-    v: f64,
-) -> (f64, f64) {
-    let abs_cross = |a: DVec3, b: DVec3| {
-        let (a, b) = (a.abs(), b.abs());
-        DVec3::new(
-            a.y * b.z + a.z * b.y,
-            a.z * b.x + a.x * b.z,
-            a.x * b.y + a.y * b.x,
-        )
-    };
-    let gamma = f64::from(gamma(8));
-    let p = abs_cross(dir, e2);
-    let det_error = gamma * e1.abs().dot(p);
-    let u_error = gamma * s.abs().dot(p) + u.abs() * det_error;
-    let v_error = gamma * dir.abs().dot(abs_cross(s, e1)) + v.abs() * det_error;
-    // Twice the first-order bound, for the terms it leaves out.
-    let scale = 2.0 / det.abs();
-    (u_error * scale, v_error * scale)
+/// The candidates of `hits` (single precision's, `triangle_lanes`) settled as [`triangle`]
+/// settles them: the lanes of `trusted` (in the triangle's box) kept within `t_max`, the
+/// others computed again by [`refined`], lane `k` against the ray and the triangle that
+/// `lane(k)` gives.
+#[inline(always)]
+fn settle(
+    hits: &mut TriangleHit8,
+    trusted: Mask8,
+    lane: impl Fn(usize) -> (Ray, [Vec3; 3]),
+    t_min: F32x8,
+    t_max: F32x8,
+) {
+    let doubtful = hits.hit.and_not(trusted).bitmask();
+    hits.hit = hits.hit & trusted & hits.t.lt(t_max);
+    if doubtful != 0 {
+        refine_lanes(hits, doubtful, lane, t_min, t_max);
+    }
 }
 
-/// The lanes of `hits` that [`refined`] confirms, with its `t`, `u` and `v`: lane `k`
-/// against the ray and the triangle `lane(k)` gives.
-#[inline(always)]
+/// The lanes `doubtful` of `hits` as [`triangle`] computes them again.
+#[cold]
+#[inline(never)]
 fn refine_lanes(
     hits: &mut TriangleHit8,
+    doubtful: u8,
     lane: impl Fn(usize) -> (Ray, [Vec3; 3]),
     t_min: F32x8,
     t_max: F32x8,
 ) {
     let mut mask = hits.hit.bitmask();
-    if mask == 0 {
-        return;
-    }
     let (mut t, mut u, mut v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
     let (t_min, t_max) = (t_min.to_array(), t_max.to_array());
-    for k in 0..8 {
-        if mask & (1 << k) == 0 {
-            continue;
-        }
-        let (ray, [p0, e1, e2]) = lane(k);
-        match refined(&ray, p0, e1, e2, t_min[k], t_max[k]) {
-            Some(hit) => (t[k], u[k], v[k]) = (hit.t, hit.u, hit.v),
-            None => mask &= !(1 << k),
+    for k in (0..8).filter(|k| doubtful & (1 << k) != 0) {
+        let (ray, triangle) = lane(k);
+        let [p0, e1, e2] = triangle;
+        let hit = refined(&ray, p0, e1, e2, t_min[k], t_max[k])
+            .filter(|hit| in_trusted_box(&ray, triangle, t_min[k], hit.t));
+        if let Some(hit) = hit {
+            (t[k], u[k], v[k]) = (hit.t, hit.u, hit.v);
+            mask |= 1 << k;
         }
     }
     *hits = TriangleHit8 {
@@ -258,14 +263,33 @@ pub fn triangle_packet(
         t_min,
     );
     hits.hit = hits.hit & Mask8::from_bitmask(active);
-    refine_lanes(&mut hits, |k| (rays.rays[k], [p0, e1, e2]), t_min, t_max);
+    if hits.hit.any() {
+        let trusted = corner_box([p0, e1, e2]).and_then(|tight| trusted_box(tight, 0.0));
+        let trusted = trusted.map_or(Mask8::from_bitmask(0), |b| {
+            BoxRay8::new(rays).holds(b.min, b.max, t_min, hits.t)
+        });
+        settle(
+            &mut hits,
+            trusted,
+            |k| (rays.rays[k], [p0, e1, e2]),
+            t_min,
+            t_max,
+        );
+    }
     hits
 }
 
 /// [`triangle`] for one ray against the eight triangles of a pack.
-#[inline]
 pub fn triangle_leaf(ray: &Ray, pack: &TrianglePack8, t_min: f32, t_max: f32) -> TriangleHit8 {
-    let (t_min, t_max) = (F32x8::splat(t_min), F32x8::splat(t_max));
+    let query = RayQuery::new(ray, t_min, IntersectOptions::default());
+    leaf_hits(&query, pack, t_max)
+}
+
+/// [`triangle_leaf`] for a query (its `1 / dir` computed once per ray).
+#[inline(always)]
+fn leaf_hits(query: &RayQuery, pack: &TrianglePack8, t_max: f32) -> TriangleHit8 {
+    let ray = &query.ray;
+    let (t_min, t_max) = (F32x8::splat(query.t_min), F32x8::splat(t_max));
     let mut hits = triangle_lanes(
         Vec3x8::splat(ray.origin),
         Vec3x8::splat(ray.dir),
@@ -274,13 +298,29 @@ pub fn triangle_leaf(ray: &Ray, pack: &TrianglePack8, t_min: f32, t_max: f32) ->
         pack.e2,
         t_min,
     );
-    let triangle = |k| [pack.p0.lane(k), pack.e1.lane(k), pack.e2.lane(k)];
-    refine_lanes(&mut hits, |k| (*ray, triangle(k)), t_min, t_max);
+    if hits.hit.any() {
+        let trusted = in_trusted_boxes8(query, pack, hits.t);
+        let triangle = |k| [pack.p0.lane(k), pack.e1.lane(k), pack.e2.lane(k)];
+        settle(&mut hits, trusted, |k| (*ray, triangle(k)), t_min, t_max);
+    }
     hits
 }
 
+/// [`in_trusted_box`] for the eight triangles of `pack`, lane `k` with the hit `t[k]`,
+/// for the lanes that single precision hits (whose corners are never NaN: a NaN or
+/// infinite vertex or edge makes the determinant or `u` NaN).
+#[inline(always)]
+fn in_trusted_boxes8(query: &RayQuery, pack: &TrianglePack8, t: F32x8) -> Mask8 {
+    let (p0, a, b) = (pack.p0, pack.p0 + pack.e1, pack.p0 + pack.e2);
+    let tight = BoxPack8 {
+        min: p0.min(a).min(b),
+        max: p0.max(a).max(b),
+    };
+    query.holds8(tight.trusted(0.0), t)
+}
+
 /// The single-precision body of [`triangle`], lane by lane, its early exits turned into
-/// a mask: the candidates that [`refine_lanes`] confirms.
+/// a mask: the candidates that [`settle`] settles.
 #[inline(always)]
 fn triangle_lanes(
     origin: Vec3x8,
@@ -373,9 +413,9 @@ impl LeafPack for Triangles {
         TrianglePack8::new(&tris)
     }
 
-    #[inline]
+    #[inline(always)]
     fn leaf(pack: &TrianglePack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
-        triangle_leaf(&query.ray, pack, query.t_min, t_max)
+        leaf_hits(query, pack, t_max)
     }
 
     #[inline(always)]
@@ -397,11 +437,7 @@ impl Shapes for Triangles {
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {
-        let p0 = self.p0.get(i);
-        Aabb::EMPTY
-            .grow(p0)
-            .grow(p0 + self.e1.get(i))
-            .grow(p0 + self.e2.get(i))
+        corner_box([self.p0.get(i), self.e1.get(i), self.e2.get(i)]).unwrap_or(Aabb::EMPTY)
     }
 
     #[inline]

@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 use p3trace::intersect::{
-    self, BoxPack8, BoxRay, BoxRay8, Boxes, IntersectOptions, Intervals8, LeafPack, RayQuery,
+    self, Aabb, BoxPack8, BoxRay, BoxRay8, Boxes, IntersectOptions, Intervals8, LeafPack, RayQuery,
     RayQuery8, SpherePack8, SphereRoots, Spheres, TriangleHit, TriangleHit8, TrianglePack8,
     Triangles,
 };
@@ -16,6 +16,11 @@ use proptest::prelude::*;
 
 const NAN: f32 = f32::NAN;
 const INF: f32 = f32::INFINITY;
+
+/// The bits of a vector's components, so that `-0.0` and `0.0` differ.
+fn bits(v: Vec3) -> [u32; 3] {
+    v.to_array().map(f32::to_bits)
+}
 
 /// Mostly ordinary values, often small integers (so that origins fall on the planes of
 /// integer boxes), sometimes zeros of both signs, infinities and NaN.
@@ -406,6 +411,7 @@ proptest! {
         p in packet(),
         spheres in prop::collection::vec((point(), radius()), 0..=8),
         roots in roots(),
+        sphere_margin in prop_oneof![Just(0.0f32), 0.0f32..4.0],
     ) {
         let mut storage = Spheres::default();
         for (centre, r) in spheres {
@@ -415,7 +421,7 @@ proptest! {
         }
         let options = IntersectOptions {
             sphere_roots: roots,
-            ..IntersectOptions::default()
+            sphere_margin,
         };
         pack_equals_scalar("sphere pack", &storage, &ray, limits, &p, options);
     }
@@ -485,6 +491,53 @@ proptest! {
                 .filter(|_| active >> i & 1 == 1)
                 .and_then(|&(lo, hi)| box_ray.interval(lo, hi, t_min, t_max));
             same_interval("box intervals8", i, scalar, lanes);
+        }
+    }
+
+    /// The hit rule's box test, one ray against eight boxes and eight rays against one,
+    /// lane by lane `BoxRay::holds`.
+    #[test]
+    fn box_holds_equal_scalar(
+        p in packet(),
+        boxes in prop::collection::vec(aabb(), 1..=8),
+        hits in prop::array::uniform8(coord()),
+    ) {
+        let t = F32x8::from_array(hits);
+        let (rays, t_min, _, _) = p.soa();
+        let ray = BoxRay::new(p.rays[0].origin, p.rays[0].dir.recip());
+        let one_ray = ray.holds8(&BoxPack8::new(&boxes), p.t_min[0], t).bitmask();
+        let (lo, hi) = boxes[0];
+        let one_box = BoxRay8::new(&rays).holds(lo, hi, t_min, t).bitmask();
+        for k in 0..8 {
+            if let Some(&(lo, hi)) = boxes.get(k) {
+                let scalar = ray.holds(lo, hi, p.t_min[0], hits[k]);
+                prop_assert_eq!(one_ray >> k & 1 == 1, scalar, "one ray, box {}", k);
+            }
+            let lane = BoxRay::new(p.rays[k].origin, p.rays[k].dir.recip());
+            let scalar = lane.holds(lo, hi, p.t_min[k], hits[k]);
+            prop_assert_eq!(one_box >> k & 1 == 1, scalar, "one box, ray {}", k);
+        }
+    }
+
+    /// `BoxPack8::trusted` against `trusted_box`, box by box, on corners that are not
+    /// NaN (a routine's hits have none).
+    #[test]
+    fn trusted_boxes_equal_scalar(
+        boxes in prop::collection::vec(aabb(), 8..=8),
+        margin in prop_oneof![Just(0.0f32), 0.0f32..4.0],
+    ) {
+        let (trusted, some) = BoxPack8::new(&boxes).trusted(margin);
+        for (k, &(min, max)) in boxes.iter().enumerate() {
+            if min.is_nan() || max.is_nan() {
+                continue;
+            }
+            let scalar = intersect::trusted_box(Aabb { min, max }, margin);
+            prop_assert_eq!(some.bitmask() >> k & 1 == 1, scalar.is_some(), "box {}", k);
+            if let Some(b) = scalar {
+                let lane = (trusted.min.lane(k), trusted.max.lane(k));
+                prop_assert_eq!(bits(lane.0), bits(b.min), "min of box {}", k);
+                prop_assert_eq!(bits(lane.1), bits(b.max), "max of box {}", k);
+            }
         }
     }
 

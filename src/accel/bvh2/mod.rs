@@ -18,7 +18,6 @@ mod build;
 
 use glam::Vec3;
 
-use super::bounds::counted_hit;
 use super::hit::ClosestHit;
 use super::stack::Stack;
 use super::structure::Structure;
@@ -235,7 +234,7 @@ impl Structure for Bvh2 {
                 let first = node.offset as usize;
                 let blocked = self.prims[first..first + node.count as usize]
                     .iter()
-                    .any(|&prim| counted_hit(geometry, prim, query, t_max).is_some());
+                    .any(|&prim| geometry.intersect(prim, query, t_max).is_some());
                 if blocked {
                     return true;
                 }

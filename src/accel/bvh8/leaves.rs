@@ -6,7 +6,6 @@
 
 use super::node::{leaf_parts, leaf_ref, pack_code, ChildRef};
 use super::packet::lanes_of;
-use crate::accel::bounds::admitted8;
 use crate::accel::hit::{for_lanes, ClosestHit};
 use crate::intersect::{LeafPack, RayQuery, RayQuery8};
 use crate::prim::{packed_kinds, PrimId, PrimKind};
@@ -40,21 +39,13 @@ impl<K: LeafPack> Packs<K> {
         self.packs.len() - 1
     }
 
-    /// Tests pack `index` against `query`, keeping the winner among the hits that count
-    /// (`accel::bounds::admits`) in `closest`.
+    /// Tests pack `index` against `query`, keeping the winner in `closest`.
     #[inline(always)]
-    fn closest(
-        &self,
-        geometry: &Geometry,
-        index: usize,
-        query: &RayQuery,
-        closest: &mut ClosestHit,
-    ) {
+    fn closest(&self, index: usize, query: &RayQuery, closest: &mut ClosestHit) {
         let hits = K::leaf(&self.packs[index], query, closest.bound());
-        let ids = &self.ids[index];
-        let counted = admitted8(geometry, |k| ids[k], |_| *query, &hits);
         let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
-        for_lanes(counted.bitmask(), |k| {
+        let ids = &self.ids[index];
+        for_lanes(hits.hit.bitmask(), |k| {
             closest.offer(Hit {
                 t: t[k],
                 prim: ids[k],
@@ -66,10 +57,8 @@ impl<K: LeafPack> Packs<K> {
 
     /// Whether a primitive of pack `index` blocks `query` within `(t_min, t_max)`.
     #[inline(always)]
-    fn blocks(&self, geometry: &Geometry, index: usize, query: &RayQuery, t_max: f32) -> bool {
-        let hits = K::leaf(&self.packs[index], query, t_max);
-        let ids = &self.ids[index];
-        admitted8(geometry, |k| ids[k], |_| *query, &hits).any()
+    fn blocks(&self, index: usize, query: &RayQuery, t_max: f32) -> bool {
+        K::leaf(&self.packs[index], query, t_max).hit.any()
     }
 
     /// The primitives of pack `index`, which holds `count`, against the lanes `lanes`
@@ -82,7 +71,6 @@ impl<K: LeafPack> Packs<K> {
     #[inline(never)]
     fn closest_packet(
         &self,
-        geometry: &Geometry,
         (index, count): (usize, usize),
         query: &RayQuery8,
         lanes: u8,
@@ -92,7 +80,7 @@ impl<K: LeafPack> Packs<K> {
         let mut bound = lanes_of(closest, ClosestHit::bound);
         for (slot, &prim) in ids.iter().enumerate().take(count) {
             let hits = K::slot8(pack, slot, query, bound, lanes);
-            let hit = admitted8(geometry, |_| prim, |k| query.lane(k), &hits).bitmask();
+            let hit = hits.hit.bitmask();
             if hit != 0 {
                 let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
                 for_lanes(hit, |k| {
@@ -111,20 +99,14 @@ impl<K: LeafPack> Packs<K> {
     /// The lanes of `lanes` that a primitive of pack `index`, which holds `count`,
     /// blocks within the packet's interval, one primitive against every lane at a time.
     #[inline(never)]
-    fn blocks_packet(
-        &self,
-        geometry: &Geometry,
-        (index, count): (usize, usize),
-        query: &RayQuery8,
-        lanes: u8,
-    ) -> u8 {
-        let (pack, ids) = (&self.packs[index], &self.ids[index]);
+    fn blocks_packet(&self, (index, count): (usize, usize), query: &RayQuery8, lanes: u8) -> u8 {
+        let pack = &self.packs[index];
         let t_max = F32x8::from_array(query.packet.t_max);
         let mut blocked = 0;
-        for (slot, &prim) in ids.iter().enumerate().take(count) {
+        for slot in 0..count {
             let open = lanes & !blocked;
             let hits = K::slot8(pack, slot, query, t_max, open);
-            blocked |= admitted8(geometry, |_| prim, |k| query.lane(k), &hits).bitmask();
+            blocked |= hits.hit.bitmask();
             if blocked == lanes {
                 break;
             }
@@ -177,17 +159,11 @@ macro_rules! define_leaves {
             /// Tests the pack of the leaf `child` against `query`, keeping the winner in
             /// `closest`; `false` when `child` holds no pack (a run of primitives).
             #[inline(always)]
-            pub fn closest(
-                &self,
-                geometry: &Geometry,
-                child: ChildRef,
-                query: &RayQuery,
-                closest: &mut ClosestHit,
-            ) -> bool {
+            pub fn closest(&self, child: ChildRef, query: &RayQuery, closest: &mut ClosestHit) -> bool {
                 let (code, _, index) = leaf_parts(child);
                 match code {
                     $(c if c == const { pack_code(PrimKind::$kind) } => {
-                        self.$field.closest(geometry, index, query, closest);
+                        self.$field.closest(index, query, closest);
                         true
                     })*
                     _ => false,
@@ -197,17 +173,11 @@ macro_rules! define_leaves {
             /// Whether a primitive of the pack of the leaf `child` blocks `query` within
             /// `(t_min, t_max)`; `None` when `child` holds no pack.
             #[inline(always)]
-            pub fn blocks(
-                &self,
-                geometry: &Geometry,
-                child: ChildRef,
-                query: &RayQuery,
-                t_max: f32,
-            ) -> Option<bool> {
+            pub fn blocks(&self, child: ChildRef, query: &RayQuery, t_max: f32) -> Option<bool> {
                 let (code, _, index) = leaf_parts(child);
                 match code {
                     $(c if c == const { pack_code(PrimKind::$kind) } => {
-                        Some(self.$field.blocks(geometry, index, query, t_max))
+                        Some(self.$field.blocks(index, query, t_max))
                     })*
                     _ => None,
                 }
@@ -221,7 +191,6 @@ macro_rules! define_leaves {
             #[inline(always)]
             pub fn closest_packet(
                 &self,
-                geometry: &Geometry,
                 child: ChildRef,
                 query: &RayQuery8,
                 lanes: u8,
@@ -231,7 +200,7 @@ macro_rules! define_leaves {
                 let fewer = count < lanes.count_ones() as usize;
                 match code {
                     $(c if fewer && c == const { pack_code(PrimKind::$kind) } => {
-                        self.$field.closest_packet(geometry, (index, count), query, lanes, closest);
+                        self.$field.closest_packet((index, count), query, lanes, closest);
                         true
                     })*
                     _ => false,
@@ -243,18 +212,12 @@ macro_rules! define_leaves {
             /// has lanes (as [`Leaves::closest_packet`]); `None` otherwise, the lanes left
             /// untested.
             #[inline(always)]
-            pub fn blocks_packet(
-                &self,
-                geometry: &Geometry,
-                child: ChildRef,
-                query: &RayQuery8,
-                lanes: u8,
-            ) -> Option<u8> {
+            pub fn blocks_packet(&self, child: ChildRef, query: &RayQuery8, lanes: u8) -> Option<u8> {
                 let (code, count, index) = leaf_parts(child);
                 let fewer = count < lanes.count_ones() as usize;
                 match code {
                     $(c if fewer && c == const { pack_code(PrimKind::$kind) } => {
-                        Some(self.$field.blocks_packet(geometry, (index, count), query, lanes))
+                        Some(self.$field.blocks_packet((index, count), query, lanes))
                     })*
                     _ => None,
                 }

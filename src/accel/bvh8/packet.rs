@@ -50,11 +50,7 @@ impl Bvh8 {
                 continue;
             }
             let leaf = child & LEAF != 0;
-            if leaf
-                && self
-                    .leaves
-                    .closest_packet(geometry, child, query, lanes, closest)
-            {
+            if leaf && self.leaves.closest_packet(child, query, lanes, closest) {
                 limit = lanes_of(closest, ClosestHit::limit);
                 continue;
             }
@@ -111,7 +107,7 @@ impl Bvh8 {
             }
             let leaf = child & LEAF != 0;
             let in_pack = if leaf {
-                self.leaves.blocks_packet(geometry, child, query, lanes)
+                self.leaves.blocks_packet(child, query, lanes)
             } else {
                 None
             };

@@ -3,7 +3,6 @@
 
 use super::node::{leaf_parts, ChildRef, LEAF};
 use super::{Bvh8, STACK_SIZE};
-use crate::accel::bounds::counted_hit;
 use crate::accel::hit::{for_lanes, ClosestHit};
 use crate::accel::stack::Stack;
 use crate::intersect::{beyond, BoxRay, RayQuery};
@@ -19,7 +18,7 @@ impl Bvh8 {
         query: &RayQuery,
         closest: &mut ClosestHit,
     ) {
-        if !self.leaves.closest(geometry, child, query, closest) {
+        if !self.leaves.closest(child, query, closest) {
             let (_, count, index) = leaf_parts(child);
             for &prim in &self.prims[index..index + count] {
                 closest.test(geometry, prim, query);
@@ -36,13 +35,13 @@ impl Bvh8 {
         query: &RayQuery,
         t_max: f32,
     ) -> bool {
-        let in_pack = self.leaves.blocks(geometry, child, query, t_max);
+        let in_pack = self.leaves.blocks(child, query, t_max);
         in_pack.unwrap_or_else(|| {
             let (_, count, index) = leaf_parts(child);
             let prims = &self.prims[index..index + count];
             prims
                 .iter()
-                .any(|&prim| counted_hit(geometry, prim, query, t_max).is_some())
+                .any(|&prim| geometry.intersect(prim, query, t_max).is_some())
         })
     }
 
