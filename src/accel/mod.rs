@@ -21,6 +21,7 @@ pub mod grid;
 mod hit;
 mod none;
 mod stack;
+pub mod stream;
 
 use std::time::{Duration, Instant};
 
