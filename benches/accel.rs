@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use p3trace::accel::BvhBuild;
-use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
+use p3trace::accel::{AccelKind, AccelOptions, Tracer};
 use p3trace::bench::ray_sets;
 use p3trace::scene::{parse_file, Scene};
 
@@ -58,7 +58,7 @@ fn builds(c: &mut Criterion) {
         let scene = scene(name);
         for (label, options) in structures() {
             group.bench_function(format!("{name}/{label}"), |b| {
-                b.iter(|| Accel::build(black_box(&scene.geometry), &options))
+                b.iter(|| Tracer::new(black_box(&scene.geometry), &options))
             });
         }
     }
@@ -71,12 +71,9 @@ fn traversal(c: &mut Criterion) {
     for name in ["balls_high", "mount_high"] {
         let scene = scene(name);
         let g = &scene.geometry;
-        let sets = ray_sets(
-            &scene,
-            &Tracer::new(g, Accel::build(g, &AccelOptions::default()).0),
-        );
+        let sets = ray_sets(&scene, &Tracer::new(g, &AccelOptions::default()));
         for (label, options) in structures() {
-            let tracer = Tracer::new(g, Accel::build(g, &options).0);
+            let tracer = Tracer::new(g, &options);
             for set in &sets {
                 group.bench_function(format!("{name}/{label}/{}", set.name), |b| {
                     b.iter(|| {

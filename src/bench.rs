@@ -508,7 +508,7 @@ impl std::fmt::Display for Line {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::Accel;
+    use crate::accel::AccelOptions;
     use crate::scene::p3f::parse_text;
     use glam::Vec3;
 
@@ -519,7 +519,7 @@ mod tests {
     fn sets_follow_the_protocol() {
         let scene = parse_text(SCENE).unwrap();
         assert_eq!(resolution(&scene), (1024, 512));
-        let tracer = Tracer::new(&scene.geometry, Accel::None);
+        let tracer = Tracer::new(&scene.geometry, &AccelOptions::brute_force());
         let [primary, shadow, reflection] = ray_sets(&scene, &tracer);
         assert_eq!(primary.rays.len(), 1024 * 512);
         // Primary rays start at the eye (aperture ignored) and are unit length.
@@ -559,7 +559,7 @@ mod tests {
     fn shadow_rays_end_at_the_centre_of_an_area_light() {
         let text = SCENE.replace("l 0 -5 -5\n", "al 0 0 6 0 0 0 4 4 1 1 1\n");
         let scene = parse_text(&text).unwrap();
-        let tracer = Tracer::new(&scene.geometry, Accel::None);
+        let tracer = Tracer::new(&scene.geometry, &AccelOptions::brute_force());
         let [_, shadow, reflection] = ray_sets(&scene, &tracer);
         assert!(shadow.rays.len() > reflection.rays.len());
         let ends = [Vec3::new(0.0, 5.0, 5.0), Vec3::new(0.0, 0.0, 6.0)];
@@ -572,7 +572,7 @@ mod tests {
     #[test]
     fn run_prints_every_path_and_the_best_per_set_and_thread_count() {
         let scene = parse_text(SCENE).unwrap();
-        let tracer = Tracer::new(&scene.geometry, Accel::None);
+        let tracer = Tracer::new(&scene.geometry, &AccelOptions::brute_force());
         let sets = ray_sets(&scene, &tracer);
         let mut lines = Vec::new();
         run(&tracer, &sets, &[1, 2], 1, |l| lines.push(l)).unwrap();
@@ -656,7 +656,7 @@ mod tests {
     /// The protocol's sets of the scene `text` under brute force, and two threads.
     fn with_sets(text: &str, check: impl FnOnce(&Tracer, &[RaySet; 3], &rayon::ThreadPool)) {
         let scene = parse_text(text).unwrap();
-        let tracer = Tracer::new(&scene.geometry, Accel::None);
+        let tracer = Tracer::new(&scene.geometry, &AccelOptions::brute_force());
         let sets = ray_sets(&scene, &tracer);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(2)

@@ -15,7 +15,7 @@ use clap::{CommandFactory, Parser};
 use cli::{
     BenchArgs, Cli, Command, CompareArgs, GenCommand, InfoArgs, MergeArgs, RenderArgs, SceneOutput,
 };
-use p3trace::accel::{Accel, AccelOptions};
+use p3trace::accel::{AccelOptions, Tracer};
 use p3trace::compare::levels;
 use p3trace::farm::{self, Canvas};
 use p3trace::generate::{dragon, mountain, random, skybox, sphereflake};
@@ -255,8 +255,6 @@ fn render_scene(args: &RenderArgs) -> Result<(Scene, u64), Failure> {
     let profile = args.profile;
     let mut scene = load_scene(&args.scene, args.seed, profile.frame())?;
     let scene_hash = scene_hash(&args.scene, args.seed)?;
-    // Spheres tested as the profile says, here rather than on a copy in the renderer.
-    scene.geometry.spheres.roots = profile.sphere_roots();
     if let Some(aperture) = args.aperture {
         scene.camera.aperture = aperture;
     }
@@ -456,11 +454,11 @@ fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
         shutter: RenderOptions::from_scene(rendered).shutter,
         ..args.accel.options(rendered.accel)
     };
-    let (structure, build_time) = Accel::build(&rendered.geometry, &options);
+    let structure = Tracer::new(&rendered.geometry, &options);
     println!(
         "structure: {}, built in {:.3} s",
         structure.name(),
-        build_time.as_secs_f64()
+        structure.build_time().as_secs_f64()
     );
     for line in structure.stats() {
         println!("  {line}");
@@ -585,9 +583,8 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     // The protocol's rays are made in the file's coordinates, as the Embree harness's.
     let scene = load_scene(&args.scene, args.seed, Frame::File)?;
     let options = args.accel.options(scene.accel);
-    let (accel, build_time) = Accel::build(&scene.geometry, &options);
-    let (name, stats) = (accel.name(), accel.stats());
-    let tracer = p3trace::accel::Tracer::new(&scene.geometry, accel);
+    let tracer = Tracer::new(&scene.geometry, &options);
+    let (name, stats, build_time) = (tracer.name(), tracer.stats(), tracer.build_time());
     let sets = bench::ray_sets(&scene, &tracer);
     let cores = p3trace::machine::logical_cpus();
     let threads = args.threads.map_or(cores, |n| n as usize);

@@ -5,29 +5,72 @@
 //! [`crate::scene::geometry`] the [`Geometry`](crate::scene::Geometry) struct with one
 //! field per kind and the dispatch of counts, materials, bounds, intersection (one ray
 //! and eight) and normals to the kind's storage, which implements
-//! [`crate::intersect::Shapes`] in the kind's own file of `src/intersect/`. Adding a kind
-//! is its file there and one line here (ARCHITECTURE.md, "Recipes").
+//! [`crate::intersect::Shapes`] in the kind's own file of `src/intersect/`. A `packed`
+//! kind's storage also implements [`crate::intersect::LeafPack`], and `packed_kinds!`
+//! hands the 8-wide BVH (`crate::accel::bvh8`) those kinds alone, so that it keeps their
+//! leaves side by side without naming any. Adding a kind is its file there and one line
+//! here (ARCHITECTURE.md, "Recipes").
 
 /// Calls `$then!` with every primitive kind in [`PrimId`] order, one entry a line:
 /// the [`PrimKind`] variant, its field of `Geometry`, its storage type (in
-/// `crate::intersect`), the name `info` prints, and `bounded` when acceleration
-/// structures hold it or `unbounded` when `Tracer` tests it apart.
+/// `crate::intersect`), the name `info` prints, `bounded` when acceleration structures
+/// hold it or `unbounded` when `Tracer` tests it apart, and `packed` when the 8-wide BVH
+/// stores up to eight of its primitives side by side in a leaf (its storage implements
+/// [`crate::intersect::LeafPack`]) or `unpacked` when it tests them one at a time.
 ///
 /// The order is part of the images: at equal distance the smaller id wins. Unbounded
 /// kinds come last, so that a bounded primitive wins a tie against them.
 macro_rules! prim_kinds {
     ($then:ident) => {
-        $then! {
-            Sphere, spheres, Spheres, "spheres", bounded;
-            MovingSphere, moving_spheres, MovingSpheres, "moving spheres", bounded;
-            Triangle, triangles, Triangles, "triangles", bounded;
-            Box, boxes, Boxes, "boxes", bounded;
-            Cone, cones, Cones, "cones and cylinders", bounded;
-            Plane, planes, Planes, "planes", unbounded;
+        $crate::prim::prim_kinds!(@ [$then] []);
+    };
+    // `$then` by its path, `$arg` before the lines (`packed_kinds!`).
+    (@ [$($then:tt)*] [$($arg:tt)*]) => {
+        $($then)*! {
+            $($arg)*
+            Sphere, spheres, Spheres, "spheres", bounded, packed;
+            MovingSphere, moving_spheres, MovingSpheres, "moving spheres", bounded, unpacked;
+            Triangle, triangles, Triangles, "triangles", bounded, packed;
+            Box, boxes, Boxes, "boxes", bounded, packed;
+            Cone, cones, Cones, "cones and cylinders", bounded, unpacked;
+            Plane, planes, Planes, "planes", unbounded, unpacked;
         }
     };
 }
 pub(crate) use prim_kinds;
+
+/// Calls `$then!` with the `packed` kinds of [`prim_kinds!`] alone, in [`PrimId`] order,
+/// one `variant, field, storage;` a line.
+macro_rules! packed_kinds {
+    ($then:ident) => {
+        $crate::prim::prim_kinds!(@ [$crate::prim::select_packed] [[$then]]);
+    };
+}
+pub(crate) use packed_kinds;
+
+/// The filter of [`packed_kinds!`]: reads the lines of [`prim_kinds!`] one at a time,
+/// keeping the `packed` ones, then calls `$then!` with them.
+macro_rules! select_packed {
+    ([$then:ident] $($lines:tt)*) => {
+        $crate::prim::select_packed!(@ $then [] $($lines)*);
+    };
+    (@ $then:ident [$($kept:tt)*]) => {
+        $then! { $($kept)* }
+    };
+    (@ $then:ident [$($kept:tt)*]
+        $kind:ident, $field:ident, $storage:ident, $name:literal, $bound:ident, packed;
+        $($rest:tt)*
+    ) => {
+        $crate::prim::select_packed!(@ $then [$($kept)* $kind, $field, $storage;] $($rest)*);
+    };
+    (@ $then:ident [$($kept:tt)*]
+        $kind:ident, $field:ident, $storage:ident, $name:literal, $bound:ident, unpacked;
+        $($rest:tt)*
+    ) => {
+        $crate::prim::select_packed!(@ $then [$($kept)*] $($rest)*);
+    };
+}
+pub(crate) use select_packed;
 
 /// `true` for `bounded`, `false` for `unbounded`: the last word of a [`prim_kinds!`] line.
 macro_rules! is_bounded {
@@ -39,8 +82,18 @@ macro_rules! is_bounded {
     };
 }
 
+/// `true` for `packed`, `false` for `unpacked`.
+macro_rules! is_packed {
+    (packed) => {
+        true
+    };
+    (unpacked) => {
+        false
+    };
+}
+
 macro_rules! define_prim_kind {
-    ($($kind:ident, $field:ident, $storage:ident, $name:literal, $bound:ident;)*) => {
+    ($($kind:ident, $field:ident, $storage:ident, $name:literal, $bound:ident, $pack:ident;)*) => {
         /// Which storage of [`crate::scene::Geometry`] a primitive lives in.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
         #[repr(u8)]
@@ -63,6 +116,14 @@ macro_rules! define_prim_kind {
                     $(PrimKind::$kind => is_bounded!($bound),)*
                 }
             }
+
+            /// Whether the 8-wide BVH stores this kind's primitives side by side in its
+            /// leaves.
+            pub const fn is_packed(self) -> bool {
+                match self {
+                    $(PrimKind::$kind => is_packed!($pack),)*
+                }
+            }
         }
     };
 }
@@ -70,14 +131,26 @@ prim_kinds!(define_prim_kind);
 
 impl PrimKind {
     /// The kinds that acceleration structures hold, in [`PrimId`] order.
-    pub const BOUNDED: [PrimKind; Self::count_where(true)] = Self::select(true);
+    pub const BOUNDED: [PrimKind; Self::count(Subset::Bounded)] = Self::select(Subset::Bounded);
     /// The kinds that `Tracer` tests apart from the structure, in [`PrimId`] order.
-    pub const UNBOUNDED: [PrimKind; Self::count_where(false)] = Self::select(false);
+    pub const UNBOUNDED: [PrimKind; Self::count(Subset::Unbounded)] =
+        Self::select(Subset::Unbounded);
+    /// The kinds whose primitives the 8-wide BVH packs, in [`PrimId`] order.
+    pub const PACKED: [PrimKind; Self::count(Subset::Packed)] = Self::select(Subset::Packed);
 
-    const fn count_where(bounded: bool) -> usize {
+    const fn is_in(self, subset: Subset) -> bool {
+        match subset {
+            Subset::Bounded => self.is_bounded(),
+            Subset::Unbounded => !self.is_bounded(),
+            Subset::Packed => self.is_packed(),
+        }
+    }
+
+    /// How many kinds `subset` holds.
+    const fn count(subset: Subset) -> usize {
         let (mut i, mut n) = (0, 0);
         while i < Self::ALL.len() {
-            if Self::ALL[i].is_bounded() == bounded {
+            if Self::ALL[i].is_in(subset) {
                 n += 1;
             }
             i += 1;
@@ -85,12 +158,12 @@ impl PrimKind {
         n
     }
 
-    /// The kinds whose `is_bounded` is `bounded`, in order (`N` of them).
-    const fn select<const N: usize>(bounded: bool) -> [PrimKind; N] {
+    /// The kinds of `subset`, in order (`N` of them).
+    const fn select<const N: usize>(subset: Subset) -> [PrimKind; N] {
         let mut kinds = [PrimKind::Sphere; N];
         let (mut i, mut k) = (0, 0);
         while i < Self::ALL.len() {
-            if Self::ALL[i].is_bounded() == bounded {
+            if Self::ALL[i].is_in(subset) {
                 kinds[k] = Self::ALL[i];
                 k += 1;
             }
@@ -98,6 +171,14 @@ impl PrimKind {
         }
         kinds
     }
+}
+
+/// The lists of kinds [`PrimKind`] keeps.
+#[derive(Clone, Copy)]
+enum Subset {
+    Bounded,
+    Unbounded,
+    Packed,
 }
 
 /// A primitive's kind and its index in that kind's arrays, packed in 32 bits so that hit
@@ -141,5 +222,8 @@ mod tests {
         assert!(PrimKind::ALL[..bounded] == PrimKind::BOUNDED);
         assert!(PrimKind::ALL[bounded..] == PrimKind::UNBOUNDED);
         assert!(PrimKind::UNBOUNDED.iter().all(|k| !k.is_bounded()));
+        assert!(PrimKind::PACKED
+            .iter()
+            .all(|k| k.is_bounded() && k.is_packed()));
     }
 }

@@ -6,7 +6,7 @@
 use arbitrary::Arbitrary;
 use glam::Vec3;
 use libfuzzer_sys::fuzz_target;
-use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
+use p3trace::accel::{AccelKind, AccelOptions, Tracer};
 use p3trace::accel::{BvhBuild, BvhWidth};
 use p3trace::ray::{Hit, Ray, RayPacket};
 use p3trace::render::sampler::SampleGrid;
@@ -203,10 +203,10 @@ fuzz_target!(|input: Input| {
     };
     let g = &scene.geometry;
     let rays: Vec<(Ray, f32)> = input.rays.iter().take(MAX_RAYS).map(|r| r.ray()).collect();
-    let brute = Tracer::new(g, Accel::None);
+    let brute = Tracer::new(g, &AccelOptions::brute_force());
     for options in structures() {
-        let tracer = Tracer::new(g, Accel::build(g, &options).0);
-        let name = tracer.accel.name();
+        let tracer = Tracer::new(g, &options);
+        let name = tracer.name();
         for &(ray, t_max) in &rays {
             for t_min in [0.0, 1e-4] {
                 let (expected, got) = (

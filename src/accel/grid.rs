@@ -21,10 +21,12 @@ use glam::{IVec3, UVec3, Vec3};
 
 use super::bounds::prim_bounds;
 use super::hit::{for_lanes, test_packet, ClosestHit};
-use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay};
+use super::structure::Structure;
+use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay, RayQuery, RayQuery8};
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::scene::Geometry;
+use crate::simd::F32x8;
 
 /// The report's `m`.
 pub const DEFAULT_DENSITY: f32 = 2.0;
@@ -161,20 +163,15 @@ impl Grid {
             "grid".into()
         }
     }
+}
 
-    pub fn closest(
-        &self,
-        geometry: &Geometry,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        closest: &mut ClosestHit,
-    ) {
+impl Structure for Grid {
+    fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
         Mailbox::with(self.mailbox, self.prims.len(), |mailbox| {
-            self.walk(ray, inv_dir, t_min, closest.limit(), |cell_refs, t_exit| {
+            self.walk(query, closest.limit(), |cell_refs, t_exit| {
                 for &r in cell_refs {
                     if mailbox.first_visit(r) {
-                        closest.test(geometry, self.prims[r as usize], ray, inv_dir, t_min);
+                        closest.test(geometry, self.prims[r as usize], query);
                     }
                 }
                 // Stop once the closest hit lies inside the cells walked so far (by the
@@ -187,22 +184,13 @@ impl Grid {
         });
     }
 
-    pub fn occluded(
-        &self,
-        geometry: &Geometry,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> bool {
+    fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
         let mut blocked = false;
         Mailbox::with(self.mailbox, self.prims.len(), |mailbox| {
-            self.walk(ray, inv_dir, t_min, t_max, |cell_refs, _| {
+            self.walk(query, t_max, |cell_refs, _| {
                 blocked = cell_refs.iter().any(|&r| {
                     mailbox.first_visit(r)
-                        && geometry
-                            .intersect(self.prims[r as usize], ray, inv_dir, t_min, t_max)
-                            .is_some()
+                        && (geometry.intersect(self.prims[r as usize], query, t_max)).is_some()
                 });
                 if blocked {
                     Walk::Stop
@@ -214,46 +202,18 @@ impl Grid {
         blocked
     }
 
-    /// The 3D-DDA: calls `visit` with each cell's objects and the distance at which the
-    /// ray leaves that cell, in order along the ray, while `visit` says to continue and
-    /// the ray is within `(t_min, t_max)` (which `visit` may shrink).
-    fn walk(
-        &self,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-        mut visit: impl FnMut(&[u32], f32) -> Walk,
-    ) {
-        let Some(mut dda) = Dda::start(self, ray, inv_dir, t_min, t_max) else {
-            return;
-        };
-        loop {
-            let cell_refs = self.cell_refs(dda.cell);
-            if !cell_refs.is_empty() {
-                match visit(cell_refs, dda.t_exit()) {
-                    Walk::Stop => return,
-                    Walk::Continue(limit) => dda.t_end = dda.t_end.min(limit),
-                }
-            }
-            if !dda.advance(self) {
-                return;
-            }
-        }
-    }
-
-    /// The closest hits of the active lanes of `packet`, as [`Grid::closest`] finds
+    /// The closest hits of the active lanes of `query`'s packet, as one ray's walk finds
     /// each. Each lane walks its own 3D-DDA; at every step the lanes that stand in the
     /// same cell test its objects together, by the primitives' packet kernels (so a
     /// coherent packet tests each object once for all its rays). Mailboxing plays no
     /// part here: it changes how often an object is tested, never the answer.
-    pub fn closest_packet(
+    fn closest_packet(
         &self,
         geometry: &Geometry,
-        packet: &RayPacket,
+        query: &RayQuery8,
         closest: &mut [ClosestHit; 8],
     ) {
-        let (rays, t_min) = (packet.rays, packet.t_min);
+        let packet = query.packet;
         let packet_inv_dir = packet.inv_dir_lanes();
         let limits = closest.each_ref().map(|c| c.limit());
         let mut walks = self.start_walks(packet, &packet_inv_dir, &limits);
@@ -265,16 +225,15 @@ impl Grid {
             for_cell_groups(&walks, walking, |cell, lanes| {
                 if lanes.count_ones() <= SINGLE_RAY_LANES {
                     for_lanes(lanes, |k| {
-                        let ray = &rays[k];
+                        let lane = query.lane(k);
                         for &r in self.cell_refs(cell) {
-                            let prim = self.prims[r as usize];
-                            closest[k].test(geometry, prim, ray, packet_inv_dir[k], t_min);
+                            closest[k].test(geometry, self.prims[r as usize], &lane);
                         }
                     });
                     return;
                 }
                 for &r in self.cell_refs(cell) {
-                    test_packet(closest, geometry, self.prims[r as usize], packet, lanes);
+                    test_packet(closest, geometry, self.prims[r as usize], query, lanes);
                 }
             });
             for (k, walk) in walks.iter_mut().enumerate() {
@@ -290,10 +249,10 @@ impl Grid {
         }
     }
 
-    /// The active lanes of `packet` whose ray is blocked within its interval, walked as
-    /// in [`Grid::closest_packet`].
-    pub fn occluded_packet(&self, geometry: &Geometry, packet: &RayPacket) -> u8 {
-        let (rays, t_min, t_max) = (packet.rays, packet.t_min, &packet.t_max);
+    /// The active lanes of `query`'s packet whose ray is blocked within its interval,
+    /// walked as the closest hits are.
+    fn occluded_packet(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
+        let (packet, t_max) = (query.packet, &query.packet.t_max);
         let packet_inv_dir = packet.inv_dir_lanes();
         let mut walks = self.start_walks(packet, &packet_inv_dir, t_max);
         let mut blocked = 0u8;
@@ -305,12 +264,10 @@ impl Grid {
             for_cell_groups(&walks, walking, |cell, lanes| {
                 if lanes.count_ones() <= SINGLE_RAY_LANES {
                     for_lanes(lanes, |k| {
-                        let ray = &rays[k];
+                        let lane = query.lane(k);
                         let hit = self.cell_refs(cell).iter().any(|&r| {
                             let prim = self.prims[r as usize];
-                            geometry
-                                .intersect(prim, ray, packet_inv_dir[k], t_min, t_max[k])
-                                .is_some()
+                            geometry.intersect(prim, &lane, t_max[k]).is_some()
                         });
                         if hit {
                             blocked |= 1 << k;
@@ -324,16 +281,36 @@ impl Grid {
                         break;
                     }
                     let prim = self.prims[r as usize];
-                    let hits = geometry.intersect_packet(prim, packet, t_max, open);
-                    for (k, hit) in hits.iter().enumerate() {
-                        if hit.is_some() {
-                            blocked |= 1 << k;
-                        }
-                    }
+                    let hits = geometry.intersect8(prim, query, F32x8::from_array(*t_max), open);
+                    blocked |= hits.hit.bitmask() & open;
                 }
             });
             for (k, walk) in walks.iter_mut().enumerate() {
                 self.step(walk, blocked & (1 << k) != 0);
+            }
+        }
+    }
+}
+
+impl Grid {
+    /// The 3D-DDA: calls `visit` with each cell's objects and the distance at which the
+    /// ray leaves that cell, in order along the ray, while `visit` says to continue and
+    /// the ray is within `(query.t_min, t_max)` (which `visit` may shrink).
+    fn walk(&self, query: &RayQuery, t_max: f32, mut visit: impl FnMut(&[u32], f32) -> Walk) {
+        let (ray, inv_dir, t_min) = (&query.ray, query.inv_dir, query.t_min);
+        let Some(mut dda) = Dda::start(self, ray, inv_dir, t_min, t_max) else {
+            return;
+        };
+        loop {
+            let cell_refs = self.cell_refs(dda.cell);
+            if !cell_refs.is_empty() {
+                match visit(cell_refs, dda.t_exit()) {
+                    Walk::Stop => return,
+                    Walk::Continue(limit) => dda.t_end = dda.t_end.min(limit),
+                }
+            }
+            if !dda.advance(self) {
+                return;
             }
         }
     }

@@ -1,11 +1,11 @@
 //! The closest-hit rule every structure keeps: the smallest `t`, and at equal `t` the
 //! smallest [`PrimId`], whatever order the primitives are tested in.
 
-use glam::Vec3;
-
+use crate::intersect::{RayQuery, RayQuery8};
 use crate::prim::PrimId;
-use crate::ray::{Hit, Ray, RayPacket};
+use crate::ray::Hit;
 use crate::scene::Geometry;
+use crate::simd::F32x8;
 
 /// The closest hit found so far along a ray, with the tie rule of brute force: at equal
 /// `t` the smaller [`PrimId`] wins, whatever order the primitives are tested in.
@@ -59,15 +59,8 @@ impl ClosestHit {
     }
 
     /// Tests `prim` and keeps its hit if it wins.
-    pub fn test(
-        &mut self,
-        geometry: &Geometry,
-        prim: PrimId,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-    ) {
-        if let Some(h) = geometry.intersect(prim, ray, inv_dir, t_min, self.bound()) {
+    pub fn test(&mut self, geometry: &Geometry, prim: PrimId, query: &RayQuery) {
+        if let Some(h) = geometry.intersect(prim, query, self.bound()) {
             self.offer(Hit {
                 t: h.t,
                 prim,
@@ -78,27 +71,26 @@ impl ClosestHit {
     }
 }
 
-/// [`ClosestHit::test`] for the lanes `lanes` of `packet`: `prim` against all of them at
-/// once by its packet kernel, each lane within its own bound, and each lane's hit offered
-/// to its closest hit.
+/// [`ClosestHit::test`] for the lanes `lanes` of `query`'s packet: `prim` against all of
+/// them at once by its packet kernel, each lane within its own bound, and each lane's hit
+/// offered to its closest hit.
 pub fn test_packet(
     closest: &mut [ClosestHit; 8],
     geometry: &Geometry,
     prim: PrimId,
-    packet: &RayPacket,
+    query: &RayQuery8,
     lanes: u8,
 ) {
-    let bounds = closest.each_ref().map(ClosestHit::bound);
-    let hits = geometry.intersect_packet(prim, packet, &bounds, lanes);
-    for_lanes(lanes, |k| {
-        if let Some(h) = hits[k] {
-            closest[k].offer(Hit {
-                t: h.t,
-                prim,
-                u: h.u,
-                v: h.v,
-            });
-        }
+    let bounds = F32x8::from_array(closest.each_ref().map(ClosestHit::bound));
+    let hits = geometry.intersect8(prim, query, bounds, lanes);
+    let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
+    for_lanes(hits.hit.bitmask() & lanes, |k| {
+        closest[k].offer(Hit {
+            t: t[k],
+            prim,
+            u: u[k],
+            v: v[k],
+        });
     });
 }
 

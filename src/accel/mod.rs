@@ -1,6 +1,9 @@
 //! Closest-hit and occlusion queries over a scene's geometry (P3F.md section 9).
 //!
-//! Every accelerator sits behind [`Accel`], so the renderer does not care which one runs.
+//! Every accelerator answers the queries of [`Structure`] and sits behind [`Accel`], so
+//! the renderer does not care which one runs; [`Tracer::new`] builds it from
+//! [`AccelOptions`], which also say how the primitives are tested (the profile's
+//! [`IntersectOptions`], carried by every query).
 //! Planes are unbounded and never go into a structure: [`Tracer`] tests them on their own
 //! beside whatever the accelerator returns.
 //!
@@ -11,8 +14,8 @@
 //! [`Tracer`] answers a ray whose origin is not finite, or whose direction is zero or not
 //! finite, with a miss before any structure sees it: the structures would disagree on it.
 //! It takes one ray at a time or a [`RayPacket`]: the 8-wide BVH and the grid trace a
-//! packet together, brute force and the binary BVH lane by lane, and every lane's answer
-//! is its single ray's.
+//! packet together, brute force and the binary BVH lane by lane ([`Structure`]'s
+//! defaults), and every lane's answer is its single ray's.
 
 pub mod bounds;
 pub mod bvh2;
@@ -22,11 +25,11 @@ mod hit;
 mod none;
 mod stack;
 pub mod stream;
+mod structure;
 
 use std::time::{Duration, Instant};
 
-use glam::Vec3;
-
+use crate::intersect::{IntersectOptions, RayQuery, RayQuery8};
 use crate::prim::PrimKind;
 use crate::ray::{lane_mask, Hit, Ray, RayPacket};
 pub use crate::scene::AccelKind;
@@ -37,6 +40,8 @@ use bvh8::Bvh8;
 use grid::Grid;
 use hit::test_packet;
 pub use hit::ClosestHit;
+use none::BruteForce;
+pub use structure::Structure;
 
 /// The acceleration structure over a scene's bounded primitives: one variant per
 /// traversal engine.
@@ -97,6 +102,9 @@ pub struct AccelOptions {
     /// The shutter interval: moving spheres are bounded over all of it (`render` sets
     /// it from `RenderOptions::shutter`).
     pub shutter: [f32; 2],
+    /// What the profile chooses in the primitives' tests, which every query carries
+    /// (`render` sets it from the shading profile).
+    pub intersect: IntersectOptions,
 }
 
 impl Default for AccelOptions {
@@ -108,15 +116,25 @@ impl Default for AccelOptions {
             grid_density: grid::DEFAULT_DENSITY,
             mailbox: false,
             shutter: [0.0, 0.0],
+            intersect: IntersectOptions::default(),
+        }
+    }
+}
+
+impl AccelOptions {
+    /// Brute force, the reference every structure answers as.
+    pub fn brute_force() -> Self {
+        AccelOptions {
+            kind: AccelKind::None,
+            ..AccelOptions::default()
         }
     }
 }
 
 impl Accel {
-    /// Builds the structure `options` asks for, and says how long that took.
-    pub fn build(geometry: &Geometry, options: &AccelOptions) -> (Accel, Duration) {
-        let start = Instant::now();
-        let accel = match options.kind {
+    /// Builds the structure `options` asks for.
+    fn build(geometry: &Geometry, options: &AccelOptions) -> Accel {
+        match options.kind {
             AccelKind::None => Accel::None,
             AccelKind::Grid => Accel::Grid(Grid::build(
                 geometry,
@@ -135,8 +153,7 @@ impl Accel {
                     },
                 }
             }
-        };
-        (accel, start.elapsed())
+        }
     }
 
     /// A short name: `none`, `grid`, `grid+mailbox`, `bvh midpoint`, `bvh sah`, with the
@@ -161,15 +178,86 @@ impl Accel {
     }
 }
 
+/// `$call` with `$s` the structure `$accel` holds, as its own type (no dynamic dispatch
+/// in the queries).
+macro_rules! with_structure {
+    ($accel:expr, |$s:ident| $call:expr) => {
+        match $accel {
+            Accel::None => {
+                let $s = &BruteForce;
+                $call
+            }
+            Accel::Grid($s) => $call,
+            Accel::Bvh2($s) => $call,
+            Accel::Bvh8($s) => $call,
+        }
+    };
+}
+
+/// Each query by the structure's own walk, or its lane-by-lane default.
+impl Structure for Accel {
+    #[inline]
+    fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
+        with_structure!(self, |s| s.closest(geometry, query, closest))
+    }
+
+    #[inline]
+    fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
+        with_structure!(self, |s| s.occluded(geometry, query, t_max))
+    }
+
+    #[inline]
+    fn closest_packet(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery8,
+        closest: &mut [ClosestHit; 8],
+    ) {
+        with_structure!(self, |s| s.closest_packet(geometry, query, closest))
+    }
+
+    #[inline]
+    fn occluded_packet(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
+        with_structure!(self, |s| s.occluded_packet(geometry, query))
+    }
+}
+
 /// Answers ray queries for one scene: the accelerator for bounded primitives, planes apart.
 pub struct Tracer<'s> {
     pub geometry: &'s Geometry,
-    pub accel: Accel,
+    accel: Accel,
+    /// What the profile chose in the primitives' tests: every query carries it.
+    options: IntersectOptions,
+    build_time: Duration,
 }
 
 impl<'s> Tracer<'s> {
-    pub fn new(geometry: &'s Geometry, accel: Accel) -> Self {
-        Tracer { geometry, accel }
+    /// Builds the structure `options` asks for over `geometry`, whose queries test the
+    /// primitives as `options.intersect` says.
+    pub fn new(geometry: &'s Geometry, options: &AccelOptions) -> Self {
+        let start = Instant::now();
+        let accel = Accel::build(geometry, options);
+        Tracer {
+            geometry,
+            accel,
+            options: options.intersect,
+            build_time: start.elapsed(),
+        }
+    }
+
+    /// The structure's short name ([`Accel::name`]).
+    pub fn name(&self) -> String {
+        self.accel.name()
+    }
+
+    /// The structure's statistics, one `name: value` per line.
+    pub fn stats(&self) -> Vec<String> {
+        self.accel.stats()
+    }
+
+    /// How long building the structure took.
+    pub fn build_time(&self) -> Duration {
+        self.build_time
     }
 
     /// The closest hit with `t` in `(t_min, t_max)`.
@@ -177,30 +265,17 @@ impl<'s> Tracer<'s> {
         if !ray.is_traceable() {
             return None;
         }
-        let inv_dir = ray.dir.recip();
+        let query = RayQuery::new(ray, t_min, self.options);
         let mut closest = ClosestHit::new(t_max);
-        let g = self.geometry;
-        match &self.accel {
-            Accel::None => none::closest(g, ray, inv_dir, t_min, &mut closest),
-            Accel::Grid(grid) => grid.closest(g, ray, inv_dir, t_min, &mut closest),
-            Accel::Bvh2(bvh) => bvh.closest(g, ray, inv_dir, t_min, &mut closest),
-            Accel::Bvh8(bvh) => bvh.closest(g, ray, inv_dir, t_min, &mut closest),
-        }
-        self.nearer_plane(ray, inv_dir, t_min, t_max, closest.hit())
+        self.accel.closest(self.geometry, &query, &mut closest);
+        self.nearer_plane(&query, t_max, closest.hit())
     }
 
     /// The closest hit among the planes and `bounded`, the accelerator's. Planes come
     /// last in id order, so a plane at the same `t` loses the tie.
-    fn nearer_plane(
-        &self,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-        bounded: Option<Hit>,
-    ) -> Option<Hit> {
+    fn nearer_plane(&self, query: &RayQuery, t_max: f32, bounded: Option<Hit>) -> Option<Hit> {
         let t_max = bounded.map_or(t_max, |h| h.t);
-        self.closest_plane(ray, inv_dir, t_min, t_max).or(bounded)
+        self.closest_plane(query, t_max).or(bounded)
     }
 
     /// Whether anything blocks the ray within `(t_min, t_max)`.
@@ -208,15 +283,9 @@ impl<'s> Tracer<'s> {
         if !ray.is_traceable() {
             return false;
         }
-        let inv_dir = ray.dir.recip();
-        let g = self.geometry;
-        self.closest_plane(ray, inv_dir, t_min, t_max).is_some()
-            || match &self.accel {
-                Accel::None => none::occluded(g, ray, inv_dir, t_min, t_max),
-                Accel::Grid(grid) => grid.occluded(g, ray, inv_dir, t_min, t_max),
-                Accel::Bvh2(bvh) => bvh.occluded(g, ray, inv_dir, t_min, t_max),
-                Accel::Bvh8(bvh) => bvh.occluded(g, ray, inv_dir, t_min, t_max),
-            }
+        let query = RayQuery::new(ray, t_min, self.options);
+        self.closest_plane(&query, t_max).is_some()
+            || self.accel.occluded(self.geometry, &query, t_max)
     }
 
     /// The closest hit of each active lane of `packet` within its interval; `None` for
@@ -229,21 +298,14 @@ impl<'s> Tracer<'s> {
             return self.closest_packet(&packet.with_active(active));
         }
         let mut closest = packet.t_max.map(ClosestHit::new);
-        let g = self.geometry;
-        let (rays, t_min, t_max) = (packet.rays, packet.t_min, &packet.t_max);
-        match &self.accel {
-            Accel::Bvh8(bvh) => bvh.closest_packet(g, packet, &mut closest),
-            Accel::Grid(grid) => grid.closest_packet(g, packet, &mut closest),
-            Accel::None | Accel::Bvh2(_) => {
-                return std::array::from_fn(|k| {
-                    (active & (1 << k) != 0)
-                        .then(|| self.closest(&rays[k], t_min, t_max[k]))
-                        .flatten()
-                })
-            }
-        }
+        let query = RayQuery8 {
+            packet,
+            options: self.options,
+        };
+        self.accel
+            .closest_packet(self.geometry, &query, &mut closest);
         // As `nearer_plane` for each lane: a plane must be closer than the structure's hit.
-        let planes = self.closest_planes(packet, active, closest.map(|c| c.limit()));
+        let planes = self.closest_planes(&query, active, closest.map(|c| c.limit()));
         let bounded = closest.map(|c| c.hit());
         std::array::from_fn(|k| {
             (active & (1 << k) != 0)
@@ -256,27 +318,23 @@ impl<'s> Tracer<'s> {
     /// mask: the answers of [`Tracer::occluded`], traced as one packet by the 8-wide BVH
     /// and the grid.
     pub fn occluded_packet(&self, packet: &RayPacket) -> u8 {
-        let (rays, t_min, t_max) = (packet.rays, packet.t_min, &packet.t_max);
         let active = packet.active & packet.traceable();
-        let planes = self.closest_planes(packet, active, *t_max);
+        let options = self.options;
+        let planes = self.closest_planes(&RayQuery8 { packet, options }, active, packet.t_max);
         let by_plane = lane_mask(|k| planes[k].is_some());
         let rest = packet.with_active(active & !by_plane);
-        let g = self.geometry;
-        let blocked = match &self.accel {
-            Accel::Bvh8(bvh) => bvh.occluded_packet(g, &rest),
-            Accel::Grid(grid) => grid.occluded_packet(g, &rest),
-            Accel::None | Accel::Bvh2(_) => lane_mask(|k| {
-                rest.active & (1 << k) != 0 && self.occluded(&rays[k], t_min, t_max[k])
-            }),
+        let query = RayQuery8 {
+            packet: &rest,
+            options,
         };
-        by_plane | blocked
+        by_plane | self.accel.occluded_packet(self.geometry, &query)
     }
 
-    /// [`Tracer::closest_plane`] for the lanes `lanes` of `packet`, each within
+    /// [`Tracer::closest_plane`] for the lanes `lanes` of `query`'s packet, each within
     /// `(t_min, t_max[k])`: each plane against the eight rays at once by its packet
     /// kernel, which answers each lane as the scalar test does
     /// (`tests/integration/simd.rs`).
-    fn closest_planes(&self, packet: &RayPacket, lanes: u8, t_max: [f32; 8]) -> [Option<Hit>; 8] {
+    fn closest_planes(&self, query: &RayQuery8, lanes: u8, t_max: [f32; 8]) -> [Option<Hit>; 8] {
         if PrimKind::UNBOUNDED
             .iter()
             .all(|&kind| self.geometry.count(kind) == 0)
@@ -286,18 +344,18 @@ impl<'s> Tracer<'s> {
         let mut closest = t_max.map(ClosestHit::new);
         for kind in PrimKind::UNBOUNDED {
             for prim in self.geometry.ids(kind) {
-                test_packet(&mut closest, self.geometry, prim, packet, lanes);
+                test_packet(&mut closest, self.geometry, prim, query, lanes);
             }
         }
         closest.map(|c| c.hit())
     }
 
     /// The closest hit among the unbounded primitives (planes), which no structure holds.
-    fn closest_plane(&self, ray: &Ray, inv_dir: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
+    fn closest_plane(&self, query: &RayQuery, t_max: f32) -> Option<Hit> {
         let mut closest = ClosestHit::new(t_max);
         for kind in PrimKind::UNBOUNDED {
             for prim in self.geometry.ids(kind) {
-                closest.test(self.geometry, prim, ray, inv_dir, t_min);
+                closest.test(self.geometry, prim, query);
             }
         }
         closest.hit()

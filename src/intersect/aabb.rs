@@ -1,14 +1,18 @@
-//! The Box primitive's test: exact, it returns where the ray meets the box's surface (the
-//! entry, or the exit from inside) in the open interval `(t_min, t_max)`, as every
-//! primitive test does, so a ray passing beside the box misses it. The acceleration
-//! structures' box test is another routine with another contract (`interval.rs`: where the
-//! ray may be inside, allowing for rounding, erring towards visiting); sharing code would
-//! change this test's bits, and so the images of scenes with boxes.
+//! The Box primitive's test and its SIMD twins (eight rays against one box; one ray
+//! against a [`BoxPack8`] of a BVH leaf). It is exact: it returns where the ray meets the
+//! box's surface (the entry, or the exit from inside) in the open interval
+//! `(t_min, t_max)`, as every primitive test does, so a ray passing beside the box misses
+//! it. The acceleration structures' box test is another routine with another contract
+//! (`interval.rs`: where the ray may be inside, allowing for rounding, erring towards
+//! visiting); sharing code would change this test's bits, and so the images of scenes
+//! with boxes.
 
 use glam::Vec3;
 
 use super::{first_root_in, first_root_in8};
-use super::{packet_hits, packet_interval, Aabb, Shapes, SurfacePoint, TriangleHit, Vec3s};
+use super::{
+    Aabb, LeafPack, RayQuery, RayQuery8, Shapes, SurfacePoint, TriangleHit, TriangleHit8, Vec3s,
+};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -182,6 +186,48 @@ pub struct Boxes {
     pub material: Vec<u32>,
 }
 
+impl LeafPack for Boxes {
+    type Pack = BoxPack8;
+
+    fn pack(&self, indices: impl Iterator<Item = usize>) -> BoxPack8 {
+        let boxes: Vec<(Vec3, Vec3)> = indices
+            .map(|i| (self.min.get(i), self.max.get(i)))
+            .collect();
+        BoxPack8::new(&boxes)
+    }
+
+    #[inline]
+    fn leaf(pack: &BoxPack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
+        let (ray, inv_dir) = (&query.ray, query.inv_dir);
+        TriangleHit8::at(aabb_leaf(ray, inv_dir, pack, query.t_min, t_max))
+    }
+
+    #[inline(always)]
+    fn slot8(
+        pack: &BoxPack8,
+        slot: usize,
+        query: &RayQuery8,
+        t_max: F32x8,
+        active: u8,
+    ) -> TriangleHit8 {
+        aabb8(query, pack.corners(slot), t_max, active)
+    }
+}
+
+/// [`aabb_packet`] for the lanes `active` of `query`'s packet, in the form of the
+/// storage's and the pack's packet tests.
+#[inline(always)]
+fn aabb8(query: &RayQuery8, (min, max): (Vec3, Vec3), t_max: F32x8, active: u8) -> TriangleHit8 {
+    TriangleHit8::at(aabb_packet(
+        query.packet,
+        min,
+        max,
+        query.t_min8(),
+        t_max,
+        active,
+    ))
+}
+
 impl Shapes for Boxes {
     fn materials(&self) -> &[u32] {
         &self.material
@@ -194,33 +240,13 @@ impl Shapes for Boxes {
         }
     }
 
-    fn intersect(
-        &self,
-        i: usize,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<TriangleHit> {
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+        let (ray, inv_dir, t_min) = (&query.ray, query.inv_dir, query.t_min);
         aabb(ray, inv_dir, self.min.get(i), self.max.get(i), t_min, t_max).map(TriangleHit::at)
     }
 
-    fn intersect_packet(
-        &self,
-        i: usize,
-        packet: &RayPacket,
-        t_max: &[f32; 8],
-        active: u8,
-    ) -> [Option<TriangleHit>; 8] {
-        let (lo, hi) = packet_interval(packet.t_min, t_max);
-        packet_hits(aabb_packet(
-            packet,
-            self.min.get(i),
-            self.max.get(i),
-            lo,
-            hi,
-            active,
-        ))
+    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
+        aabb8(query, (self.min.get(i), self.max.get(i)), t_max, active)
     }
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {

@@ -72,34 +72,21 @@ pub trait Shapes {
     /// unbounded kind (which no structure holds).
     fn bounds(&self, i: usize, shutter: [f32; 2]) -> Aabb;
 
-    /// The scalar test: the closest hit in `(t_min, t_max)`, with barycentrics for
-    /// triangles (zero for other kinds); `inv_dir = 1 / ray.dir`.
-    fn intersect(
-        &self,
-        i: usize,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<TriangleHit>;
+    /// The scalar test: the closest hit of `query` in `(query.t_min, t_max)`, with
+    /// barycentrics for triangles (zero for other kinds).
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit>;
 
-    /// [`Shapes::intersect`] for the lanes `active` of `packet`, each within
-    /// `(packet.t_min, t_max[k])` (the packet's own bounds, or tighter ones a traversal
-    /// keeps), each lane bit for bit the scalar answer. By default lane by lane; kinds
-    /// with a packet kernel use it.
-    fn intersect_packet(
-        &self,
-        i: usize,
-        packet: &RayPacket,
-        t_max: &[f32; 8],
-        active: u8,
-    ) -> [Option<TriangleHit>; 8] {
-        std::array::from_fn(|k| {
-            let ray = &packet.rays[k];
+    /// [`Shapes::intersect`] for the lanes `active` of `query`'s packet, each within
+    /// `(packet.t_min, t_max)` lane by lane (the packet's own bounds, or tighter ones a
+    /// traversal keeps), each lane bit for bit the scalar answer; the other lanes miss.
+    /// By default lane by lane; a kind with a packet kernel (`*_packet`) calls it.
+    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
+        let t_max = t_max.to_array();
+        TriangleHit8::from_lanes(std::array::from_fn(|k| {
             (active & (1 << k) != 0)
-                .then(|| self.intersect(i, ray, ray.dir.recip(), packet.t_min, t_max[k]))
+                .then(|| self.intersect(i, &query.lane(k), t_max[k]))
                 .flatten()
-        })
+        }))
     }
 
     /// The outward unit normal at the hit point `p` (barycentrics `u`, `v` for
@@ -109,6 +96,89 @@ pub trait Shapes {
     /// The hit at `t` along `ray` (barycentrics `u`, `v` for triangles; the ray's time
     /// for moving primitives) recomputed on the surface, with its error bound and normal.
     fn surface_point(&self, i: usize, ray: &Ray, t: f32, u: f32, v: f32) -> SurfacePoint;
+}
+
+/// What a profile chooses in an intersection: the form of the sphere test's quadratic.
+/// Chosen where the tracer is built and handed to the kernels with each query (as
+/// Embree's per-query context), never kept with the geometry.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct IntersectOptions {
+    pub sphere_roots: SphereRoots,
+}
+
+/// A kind whose primitives the 8-wide BVH stores side by side (`packed` in
+/// `prim_kinds!`): up to eight of them in a leaf's pack, tested against one ray by the
+/// kind's leaf kernel, or slot by slot against a packet by its packet kernel. Each slot's
+/// answer is the scalar test's ([`Shapes::intersect`]) bit for bit.
+pub trait LeafPack: Shapes {
+    /// Eight primitives side by side; unused slots are padding that no ray hits.
+    type Pack: Clone + Copy + std::fmt::Debug;
+
+    /// The primitives `indices` (one to eight) as a pack.
+    fn pack(&self, indices: impl Iterator<Item = usize>) -> Self::Pack;
+
+    /// One ray against the eight slots of `pack`, within `(query.t_min, t_max)`.
+    fn leaf(pack: &Self::Pack, query: &RayQuery, t_max: f32) -> TriangleHit8;
+
+    /// The primitive in slot `slot` of `pack` against the lanes `active` of `query`'s
+    /// packet, as [`Shapes::intersect8`] tests a primitive of the storage.
+    fn slot8(
+        pack: &Self::Pack,
+        slot: usize,
+        query: &RayQuery8,
+        t_max: F32x8,
+        active: u8,
+    ) -> TriangleHit8;
+}
+
+/// One ray as a query's primitive tests take it, with what stays the same for all of
+/// them: `1 / dir`, the start of the interval, and what the profile chose (`options`).
+/// The end of the interval shrinks as hits are found, and goes with each test.
+#[derive(Clone, Copy, Debug)]
+pub struct RayQuery {
+    pub ray: Ray,
+    pub inv_dir: Vec3,
+    pub t_min: f32,
+    pub options: IntersectOptions,
+}
+
+impl RayQuery {
+    pub fn new(ray: &Ray, t_min: f32, options: IntersectOptions) -> Self {
+        RayQuery {
+            ray: *ray,
+            inv_dir: ray.dir.recip(),
+            t_min,
+            options,
+        }
+    }
+}
+
+/// [`RayQuery`] for eight rays: a packet (its lanes' `1 / dir`, the start of their
+/// interval) and what the profile chose.
+#[derive(Clone, Copy, Debug)]
+pub struct RayQuery8<'p> {
+    pub packet: &'p RayPacket<'p>,
+    pub options: IntersectOptions,
+}
+
+impl RayQuery8<'_> {
+    /// Lane `k`'s ray as a query of its own: the same `1 / dir`, bit for bit, as
+    /// [`RayQuery::new`] makes.
+    #[inline]
+    pub fn lane(&self, k: usize) -> RayQuery {
+        RayQuery {
+            ray: self.packet.rays[k],
+            inv_dir: self.packet.inv_dir.lane(k),
+            t_min: self.packet.t_min,
+            options: self.options,
+        }
+    }
+
+    /// The start of every lane's interval, as the packet kernels take it.
+    #[inline]
+    pub fn t_min8(&self) -> F32x8 {
+        F32x8::splat(self.packet.t_min)
+    }
 }
 
 /// Three parallel arrays of coordinates.
@@ -137,23 +207,6 @@ impl Vec3s {
     pub fn is_empty(&self) -> bool {
         self.x.is_empty()
     }
-}
-
-/// A packet kernel's answer (hit mask, `t` lanes) as one hit per lane, `u = v = 0`.
-fn packet_hits((hit, t): (Mask8, F32x8)) -> [Option<TriangleHit>; 8] {
-    let (hit, t) = (hit.bitmask(), t.to_array());
-    std::array::from_fn(|k| {
-        (hit & (1 << k) != 0).then(|| TriangleHit {
-            t: t[k],
-            u: 0.0,
-            v: 0.0,
-        })
-    })
-}
-
-/// The packet kernels' interval lanes from the form [`Shapes::intersect_packet`] takes.
-fn packet_interval(t_min: f32, t_max: &[f32; 8]) -> (F32x8, F32x8) {
-    (F32x8::splat(t_min), F32x8::from_array(*t_max))
 }
 
 /// The relative error bound of `n` rounded operations, `n u / (1 - n u)` with `u` the unit

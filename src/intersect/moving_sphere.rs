@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::sphere::{sphere, sphere_bounds, sphere_surface_point};
-use super::{Aabb, Shapes, SurfacePoint, TriangleHit, Vec3s};
+use super::{Aabb, RayQuery, Shapes, SurfacePoint, TriangleHit, Vec3s};
 use crate::ray::Ray;
 
 /// Spheres whose centre moves linearly from `centre0` at `time0` to `centre1` at `time1`.
@@ -43,16 +43,10 @@ impl Shapes for MovingSpheres {
             .union(sphere_bounds(self.centre_at(i, shutter[1]), r))
     }
 
-    fn intersect(
-        &self,
-        i: usize,
-        ray: &Ray,
-        _inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<TriangleHit> {
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+        let (ray, radius) = (&query.ray, self.radius[i]);
         let centre = self.centre_at(i, ray.time);
-        sphere(ray, centre, self.radius[i], t_min, t_max).map(TriangleHit::at)
+        sphere(ray, centre, radius, query.t_min, t_max).map(TriangleHit::at)
     }
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, time: f32) -> Vec3 {

@@ -3,7 +3,9 @@
 
 use glam::Vec3;
 
-use super::{gamma, packet_hits, packet_interval, Aabb, Shapes, SurfacePoint, TriangleHit, Vec3s};
+use super::{
+    gamma, Aabb, RayQuery, RayQuery8, Shapes, SurfacePoint, TriangleHit, TriangleHit8, Vec3s,
+};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -57,31 +59,19 @@ impl Shapes for Planes {
         }
     }
 
-    fn intersect(
-        &self,
-        i: usize,
-        ray: &Ray,
-        _inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<TriangleHit> {
-        plane(ray, self.normal.get(i), self.offset[i], t_min, t_max).map(TriangleHit::at)
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+        let (normal, offset) = (self.normal.get(i), self.offset[i]);
+        plane(&query.ray, normal, offset, query.t_min, t_max).map(TriangleHit::at)
     }
 
-    fn intersect_packet(
-        &self,
-        i: usize,
-        packet: &RayPacket,
-        t_max: &[f32; 8],
-        active: u8,
-    ) -> [Option<TriangleHit>; 8] {
-        let (lo, hi) = packet_interval(packet.t_min, t_max);
-        packet_hits(plane_packet(
-            packet,
-            self.normal.get(i),
-            self.offset[i],
-            lo,
-            hi,
+    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
+        let (normal, offset) = (self.normal.get(i), self.offset[i]);
+        TriangleHit8::at(plane_packet(
+            query.packet,
+            normal,
+            offset,
+            query.t_min8(),
+            t_max,
             active,
         ))
     }

@@ -5,7 +5,10 @@
 use glam::Vec3;
 
 use super::{first_root_in, first_root_in8};
-use super::{gamma, packet_hits, packet_interval, Aabb, Shapes, SurfacePoint, TriangleHit, Vec3s};
+use super::{
+    gamma, Aabb, LeafPack, RayQuery, RayQuery8, Shapes, SurfacePoint, TriangleHit, TriangleHit8,
+    Vec3s,
+};
 
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
@@ -192,18 +195,45 @@ pub struct Spheres {
     pub centre: Vec3s,
     pub radius: Vec<f32>,
     pub material: Vec<u32>,
-    /// The form of the quadratic every test of these spheres takes.
-    pub roots: SphereRoots,
 }
 
-impl Spheres {
-    /// The spheres `indices` (at most eight) side by side, for a BVH leaf.
-    pub fn pack(&self, indices: impl Iterator<Item = usize>) -> SpherePack8 {
+impl LeafPack for Spheres {
+    type Pack = SpherePack8;
+
+    fn pack(&self, indices: impl Iterator<Item = usize>) -> SpherePack8 {
         let spheres: Vec<(Vec3, f32)> = indices
             .map(|i| (self.centre.get(i), self.radius[i]))
             .collect();
         SpherePack8::new(&spheres)
     }
+
+    #[inline]
+    fn leaf(pack: &SpherePack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
+        let roots = query.options.sphere_roots;
+        TriangleHit8::at(sphere_leaf(&query.ray, pack, roots, query.t_min, t_max))
+    }
+
+    #[inline(always)]
+    fn slot8(
+        pack: &SpherePack8,
+        slot: usize,
+        query: &RayQuery8,
+        t_max: F32x8,
+        active: u8,
+    ) -> TriangleHit8 {
+        let (centre, radius) = (pack.centre.lane(slot), pack.radius.to_array()[slot]);
+        sphere8(query, centre, radius, t_max, active)
+    }
+}
+
+/// [`sphere_packet`] for the lanes `active` of `query`'s packet, in the form of the
+/// storage's and the pack's packet tests, with the form of the roots the query chose.
+#[inline(always)]
+fn sphere8(query: &RayQuery8, centre: Vec3, radius: f32, t_max: F32x8, active: u8) -> TriangleHit8 {
+    let (rays, roots, t_min) = (query.packet, query.options.sphere_roots, query.t_min8());
+    TriangleHit8::at(sphere_packet(
+        rays, centre, radius, roots, t_min, t_max, active,
+    ))
 }
 
 /// [`Shapes::surface_point`] of a sphere. The hit's offset from the centre is taken as
@@ -254,39 +284,18 @@ impl Shapes for Spheres {
     }
 
     #[inline]
-    fn intersect(
-        &self,
-        i: usize,
-        ray: &Ray,
-        _inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<TriangleHit> {
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+        let (ray, t_min) = (&query.ray, query.t_min);
         let (centre, radius) = (self.centre.get(i), self.radius[i]);
-        match self.roots {
+        match query.options.sphere_roots {
             SphereRoots::Precise => sphere(ray, centre, radius, t_min, t_max),
             SphereRoots::Textbook => sphere_textbook(ray, centre, radius, t_min, t_max),
         }
         .map(TriangleHit::at)
     }
 
-    fn intersect_packet(
-        &self,
-        i: usize,
-        packet: &RayPacket,
-        t_max: &[f32; 8],
-        active: u8,
-    ) -> [Option<TriangleHit>; 8] {
-        let (lo, hi) = packet_interval(packet.t_min, t_max);
-        packet_hits(sphere_packet(
-            packet,
-            self.centre.get(i),
-            self.radius[i],
-            self.roots,
-            lo,
-            hi,
-            active,
-        ))
+    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
+        sphere8(query, self.centre.get(i), self.radius[i], t_max, active)
     }
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {

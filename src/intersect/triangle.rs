@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::{gamma, packet_interval, Aabb, Shapes, SurfacePoint, Vec3s};
+use super::{gamma, Aabb, LeafPack, RayQuery, RayQuery8, Shapes, SurfacePoint, Vec3s};
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, Mask8, Vec3x8};
 
@@ -63,6 +63,31 @@ pub struct TriangleHit8 {
     pub t: F32x8,
     pub u: F32x8,
     pub v: F32x8,
+}
+
+impl TriangleHit8 {
+    /// Hits at `t` with no barycentrics: the hits of the other kinds.
+    pub fn at((hit, t): (Mask8, F32x8)) -> Self {
+        TriangleHit8 {
+            hit,
+            t,
+            u: F32x8::ZERO,
+            v: F32x8::ZERO,
+        }
+    }
+
+    /// The hit of each lane (a miss's lanes zero).
+    pub fn from_lanes(hits: [Option<TriangleHit>; 8]) -> Self {
+        let lane = |field: fn(&TriangleHit) -> f32| {
+            F32x8::from_array(hits.map(|h| h.as_ref().map_or(0.0, field)))
+        };
+        TriangleHit8 {
+            hit: Mask8::from_bitmask(crate::ray::lane_mask(|k| hits[k].is_some())),
+            t: lane(|h| h.t),
+            u: lane(|h| h.u),
+            v: lane(|h| h.v),
+        }
+    }
 }
 
 /// Eight triangles side by side for [`triangle_leaf`], stored as the scene stores them
@@ -196,14 +221,6 @@ impl Triangles {
         }
     }
 
-    /// The triangles `indices` (at most eight) side by side, for a BVH leaf.
-    pub fn pack(&self, indices: impl Iterator<Item = usize>) -> TrianglePack8 {
-        let tris: Vec<[Vec3; 3]> = indices
-            .map(|i| [self.p0.get(i), self.e1.get(i), self.e2.get(i)])
-            .collect();
-        TrianglePack8::new(&tris)
-    }
-
     /// Unit geometric normal `normalize(e1 x e2)`.
     pub fn geometric_normal(&self, i: usize) -> Vec3 {
         self.e1.get(i).cross(self.e2.get(i)).normalize_or_zero()
@@ -224,6 +241,34 @@ impl Triangles {
     }
 }
 
+impl LeafPack for Triangles {
+    type Pack = TrianglePack8;
+
+    fn pack(&self, indices: impl Iterator<Item = usize>) -> TrianglePack8 {
+        let tris: Vec<[Vec3; 3]> = indices
+            .map(|i| [self.p0.get(i), self.e1.get(i), self.e2.get(i)])
+            .collect();
+        TrianglePack8::new(&tris)
+    }
+
+    #[inline]
+    fn leaf(pack: &TrianglePack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
+        triangle_leaf(&query.ray, pack, query.t_min, t_max)
+    }
+
+    #[inline(always)]
+    fn slot8(
+        pack: &TrianglePack8,
+        slot: usize,
+        query: &RayQuery8,
+        t_max: F32x8,
+        active: u8,
+    ) -> TriangleHit8 {
+        let (p0, e1, e2) = (pack.p0.lane(slot), pack.e1.lane(slot), pack.e2.lane(slot));
+        triangle_packet(query.packet, p0, e1, e2, query.t_min8(), t_max, active)
+    }
+}
+
 impl Shapes for Triangles {
     fn materials(&self) -> &[u32] {
         &self.material
@@ -238,54 +283,14 @@ impl Shapes for Triangles {
     }
 
     #[inline]
-    fn intersect(
-        &self,
-        i: usize,
-        ray: &Ray,
-        _inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> Option<TriangleHit> {
-        triangle(
-            ray,
-            self.p0.get(i),
-            self.e1.get(i),
-            self.e2.get(i),
-            t_min,
-            t_max,
-        )
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+        let (p0, e1, e2) = (self.p0.get(i), self.e1.get(i), self.e2.get(i));
+        triangle(&query.ray, p0, e1, e2, query.t_min, t_max)
     }
 
-    fn intersect_packet(
-        &self,
-        i: usize,
-        packet: &RayPacket,
-        t_max: &[f32; 8],
-        active: u8,
-    ) -> [Option<TriangleHit>; 8] {
-        let (lo, hi) = packet_interval(packet.t_min, t_max);
-        let h = triangle_packet(
-            packet,
-            self.p0.get(i),
-            self.e1.get(i),
-            self.e2.get(i),
-            lo,
-            hi,
-            active,
-        );
-        let (hit, t, u, v) = (
-            h.hit.bitmask(),
-            h.t.to_array(),
-            h.u.to_array(),
-            h.v.to_array(),
-        );
-        std::array::from_fn(|k| {
-            (hit & (1 << k) != 0).then(|| TriangleHit {
-                t: t[k],
-                u: u[k],
-                v: v[k],
-            })
-        })
+    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
+        let (p0, e1, e2) = (self.p0.get(i), self.e1.get(i), self.e2.get(i));
+        triangle_packet(query.packet, p0, e1, e2, query.t_min8(), t_max, active)
     }
 
     /// The geometric normal of P3F.md section 2 (triangles have no inside), or for smooth

@@ -12,6 +12,7 @@
 
 pub mod camera;
 pub mod film;
+pub mod jpeg_scan;
 pub mod light;
 pub mod progress;
 pub mod region;
@@ -27,7 +28,8 @@ use bumpalo::Bump;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::accel::{Accel, AccelKind, AccelOptions, Tracer};
+use crate::accel::{AccelKind, AccelOptions, Tracer};
+use crate::intersect::IntersectOptions;
 use crate::limits::{check_image_size, MAX_SPP_SIDE};
 use crate::ray::Ray;
 use crate::scene::Scene;
@@ -197,32 +199,33 @@ pub struct RenderReport {
 pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, String> {
     options.check_size()?;
     let mut warnings = Vec::new();
-    // Moving spheres are bounded over the whole shutter.
+    // Moving spheres are bounded over the whole shutter, and spheres are tested as the
+    // profile says (the course's renderer solved the textbook quadratic).
     let accel_options = AccelOptions {
         shutter: options.shutter,
+        intersect: IntersectOptions {
+            sphere_roots: options.shade.profile.sphere_roots(),
+        },
         ..options.accel
     };
-    // Spheres are tested as the profile says (the course's renderer solved the textbook
-    // quadratic): on a copy of the geometry that says so where the scene's does not. The
-    // binary sets the scene's as it reads it, so that no render copies a large scene.
-    let copy;
-    let roots = options.shade.profile.sphere_roots();
-    let geometry = if scene.geometry.spheres.roots == roots {
-        &scene.geometry
-    } else {
-        copy = scene.geometry.with_sphere_roots(roots);
-        &copy
-    };
     // The skybox decodes while the structure is built: both use rayon's threads.
-    let (skybox, (accel, build_time)) = rayon::join(
+    let (skybox, tracer) = rayon::join(
         || match (&scene.skybox, options.skybox) {
             (Some(dir), true) => Some(Skybox::load(dir)),
             _ => None,
         },
-        || Accel::build(geometry, &accel_options),
+        || Tracer::new(&scene.geometry, &accel_options),
     );
     let skybox = match skybox {
-        Some(Ok(sky)) => Some(sky),
+        Some(Ok(sky)) => {
+            warnings.extend(sky.damaged().iter().map(|face| {
+                format!(
+                    "damaged skybox face {face}: it is drawn as far as it decodes \
+                     (a copy whose line endings were converted has lost bytes)"
+                )
+            }));
+            Some(sky)
+        }
         Some(Err(e)) => {
             warnings.push(format!(
                 "skybox not loaded ({e}); the background colour is used instead"
@@ -231,8 +234,8 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         }
         None => None,
     };
-    let (accel_name, accel_stats) = (accel.name(), accel.stats());
-    let tracer = Tracer::new(geometry, accel);
+    let (accel_name, accel_stats) = (tracer.name(), tracer.stats());
+    let build_time = tracer.build_time();
     let jittered = matches!(options.sampling, Sampling::Jittered(_));
     let shader = Shader::new(scene, &tracer, skybox.as_ref(), options.shade, jittered);
     let camera = Camera::new(&scene.camera, options.width, options.height);

@@ -539,7 +539,7 @@ mod tests {
     fn trace_inside_glass(origin: Vec3, dir: Vec3) -> (Vec3, RayCounts) {
         let text = "bclr 0.2 0.4 0.6\nf 1 1 1 0 1 1 1 0 1 1 1.5\ns 0 0 0 1";
         let scene = crate::scene::p3f::parse_text(text).unwrap();
-        let tracer = Tracer::new(&scene.geometry, crate::accel::Accel::None);
+        let tracer = Tracer::new(&scene.geometry, &crate::accel::AccelOptions::brute_force());
         let options = ShadeOptions {
             max_depth: 2,
             ..ShadeOptions::default()
@@ -608,7 +608,7 @@ mod tests {
             assert!((f - e).abs() < 1e-6, "{factors:?}");
         }
         let scene = crate::scene::p3f::parse_text("bclr 0.2 0.4 0.6").unwrap();
-        let tracer = Tracer::new(&scene.geometry, crate::accel::Accel::None);
+        let tracer = Tracer::new(&scene.geometry, &crate::accel::AccelOptions::brute_force());
         let sky_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sky_yup");
         let sky = Skybox::load(&sky_dir).unwrap();
         let dir = Vec3::new(0.3, 0.5, -0.8).normalize();
@@ -640,7 +640,7 @@ mod tests {
     /// A shader over an empty scene, for the direction helpers.
     fn with_shader(roughness: f32, check: impl FnOnce(&Shader)) {
         let scene = crate::scene::p3f::parse_text("bclr 0 0 0").unwrap();
-        let tracer = Tracer::new(&scene.geometry, crate::accel::Accel::None);
+        let tracer = Tracer::new(&scene.geometry, &crate::accel::AccelOptions::brute_force());
         let options = ShadeOptions {
             roughness,
             ..ShadeOptions::default()

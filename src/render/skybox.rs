@@ -1,9 +1,16 @@
 //! The cube-map skybox of `env DIR` (P3F.md section 10): six faces, nearest texel.
+//!
+//! A JPEG face's data is checked as it is decoded ([`jpeg_scan`]): a damaged one (cut
+//! short, or a copy whose bytes a line-ending conversion changed, as some course
+//! repositories' faces are) decodes in silence to bands of pink and purple. It is drawn
+//! as it decodes, and [`Skybox::damaged`] names it.
 
 use std::path::Path;
 
 use glam::Vec3;
 use rayon::prelude::*;
+
+use super::jpeg_scan;
 
 /// Face files in the order of [`Face`].
 pub const FACE_NAMES: [&str; 6] = ["right", "left", "top", "bottom", "front", "back"];
@@ -29,6 +36,8 @@ struct FaceImage {
 #[derive(Clone, Debug)]
 pub struct Skybox {
     faces: Vec<FaceImage>,
+    /// A line per damaged face: its path and what the strict decoder found.
+    damaged: Vec<String>,
 }
 
 impl Skybox {
@@ -37,7 +46,7 @@ impl Skybox {
     /// the dragon takes to render at one sample a pixel. Of several failures, the first
     /// face's is reported.
     pub fn load(dir: &Path) -> Result<Skybox, String> {
-        let faces: Vec<Result<FaceImage, String>> = FACE_NAMES
+        let faces: Vec<Result<(FaceImage, Option<String>), String>> = FACE_NAMES
             .par_iter()
             .map(|name| {
                 let path = ["jpg", "jpeg", "png"]
@@ -45,22 +54,36 @@ impl Skybox {
                     .map(|ext| dir.join(format!("{name}.{ext}")))
                     .find(|p| p.is_file())
                     .ok_or_else(|| format!("no {name}.jpg or {name}.png in {}", dir.display()))?;
-                let image = image::open(&path)
-                    .map_err(|e| format!("cannot read {}: {e}", path.display()))?
-                    .into_rgb8();
+                let bytes = std::fs::read(&path)
+                    .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+                let (image, damage) = decode_face(&bytes)
+                    .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
                 if image.width() == 0 || image.height() == 0 {
                     return Err(format!("{} is empty", path.display()));
                 }
-                Ok(FaceImage {
+                let face = FaceImage {
                     width: image.width(),
                     height: image.height(),
                     rgb: image.into_raw(),
-                })
+                };
+                Ok((face, damage.map(|e| format!("{} ({e})", path.display()))))
             })
             .collect();
+        let (faces, damaged): (Vec<FaceImage>, Vec<Option<String>>) = faces
+            .into_iter()
+            .collect::<Result<Vec<_>, _>>()?
+            .into_iter()
+            .unzip();
         Ok(Skybox {
-            faces: faces.into_iter().collect::<Result<_, _>>()?,
+            faces,
+            damaged: damaged.into_iter().flatten().collect(),
         })
+    }
+
+    /// The faces that decoded only forgivingly, a line each: the path and, in brackets,
+    /// the damage.
+    pub fn damaged(&self) -> &[String] {
+        &self.damaged
     }
 
     /// The colour seen in direction `d` (need not be unit length).
@@ -79,6 +102,16 @@ impl Skybox {
             image.rgb[i + 2] as f32,
         ) / 255.99
     }
+}
+
+/// A face's pixels, and for a JPEG whose data [`jpeg_scan`] finds damaged, why.
+fn decode_face(bytes: &[u8]) -> Result<(image::RgbImage, Option<String>), String> {
+    let image = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
+    let damage = match image::guess_format(bytes) {
+        Ok(image::ImageFormat::Jpeg) => jpeg_scan::damage(bytes),
+        _ => None,
+    };
+    Ok((image.into_rgb8(), damage))
 }
 
 /// Index of the texel nearest to `s` in `[0, 1]` along a side of `size` texels.
@@ -167,6 +200,26 @@ mod tests {
         }
     }
 
+    /// A face as a JPEG, and the face damaged: cut short by 12 bytes.
+    #[test]
+    fn a_damaged_jpeg_face_says_so_and_decodes_as_before() {
+        let face = image::RgbImage::from_fn(64, 48, |x, y| image::Rgb([x as u8, y as u8, 0]));
+        let mut bytes = Vec::new();
+        image::DynamicImage::from(face)
+            .write_to(
+                &mut std::io::Cursor::new(&mut bytes),
+                image::ImageFormat::Jpeg,
+            )
+            .unwrap();
+        let (pixels, damage) = decode_face(&bytes).unwrap();
+        assert_eq!(damage, None);
+        assert!(pixels == image::load_from_memory(&bytes).unwrap().into_rgb8());
+        let cut = &bytes[..bytes.len() - 12];
+        let (pixels, damage) = decode_face(cut).unwrap();
+        assert_eq!(damage.as_deref(), Some("premature end of data segment"));
+        assert!(pixels == image::load_from_memory(cut).unwrap().into_rgb8());
+    }
+
     #[test]
     fn lookup_reads_the_nearest_texel_bottom_row_first() {
         // A 2 x 2 face whose bottom-left texel is red and the rest black.
@@ -179,6 +232,7 @@ mod tests {
         };
         let sky = Skybox {
             faces: vec![face; 6],
+            damaged: Vec::new(),
         };
         // Back face: (sc, tc) = (x, y); s = t = 0 at the direction (-1, -1, -1).
         let c = sky.lookup(Vec3::new(-0.9, -0.9, -1.0));

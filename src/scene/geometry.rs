@@ -5,12 +5,15 @@
 
 use glam::Vec3;
 
-use crate::intersect::{Aabb, Shapes, SphereRoots, SurfacePoint, TriangleHit};
+use crate::intersect::{
+    Aabb, RayQuery, RayQuery8, Shapes, SurfacePoint, TriangleHit, TriangleHit8,
+};
 use crate::prim::{prim_kinds, PrimId, PrimKind};
-use crate::ray::{Ray, RayPacket};
+use crate::ray::Ray;
+use crate::simd::F32x8;
 
 macro_rules! define_geometry {
-    ($($kind:ident, $field:ident, $storage:ident, $name:literal, $bound:ident;)*) => {
+    ($($kind:ident, $field:ident, $storage:ident, $name:literal, $bound:ident, $pack:ident;)*) => {
         /// All primitives of a scene, by kind.
         #[derive(Clone, Debug, Default)]
         pub struct Geometry {
@@ -39,37 +42,28 @@ macro_rules! define_geometry {
                 }
             }
 
-            /// The scalar test of one primitive: the closest hit in `(t_min, t_max)`, with
-            /// barycentrics for triangles.
+            /// The scalar test of one primitive: the closest hit of `query` in
+            /// `(query.t_min, t_max)`, with barycentrics for triangles.
             #[inline]
-            pub fn intersect(
-                &self,
-                prim: PrimId,
-                ray: &Ray,
-                inv_dir: Vec3,
-                t_min: f32,
-                t_max: f32,
-            ) -> Option<TriangleHit> {
+            pub fn intersect(&self, prim: PrimId, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
                 match prim.kind() {
-                    $(PrimKind::$kind => {
-                        self.$field.intersect(prim.index(), ray, inv_dir, t_min, t_max)
-                    })*
+                    $(PrimKind::$kind => self.$field.intersect(prim.index(), query, t_max),)*
                 }
             }
 
-            /// [`Geometry::intersect`] for the lanes `active` of `packet`, each within
-            /// `(packet.t_min, t_max[k])`, by the kind's packet kernel: each lane's answer
-            /// is bit for bit the scalar one.
-            pub fn intersect_packet(
+            /// [`Geometry::intersect`] for the lanes `active` of `query`'s packet, each
+            /// within `(packet.t_min, t_max)` lane by lane, by the kind's packet kernel:
+            /// each lane's answer is bit for bit the scalar one.
+            pub fn intersect8(
                 &self,
                 prim: PrimId,
-                packet: &RayPacket,
-                t_max: &[f32; 8],
+                query: &RayQuery8,
+                t_max: F32x8,
                 active: u8,
-            ) -> [Option<TriangleHit>; 8] {
+            ) -> TriangleHit8 {
                 let i = prim.index();
                 match prim.kind() {
-                    $(PrimKind::$kind => self.$field.intersect_packet(i, packet, t_max, active),)*
+                    $(PrimKind::$kind => self.$field.intersect8(i, query, t_max, active),)*
                 }
             }
 
@@ -104,13 +98,6 @@ macro_rules! define_geometry {
 prim_kinds!(define_geometry);
 
 impl Geometry {
-    /// A copy whose spheres are tested with the quadratic `roots`.
-    pub fn with_sphere_roots(&self, roots: SphereRoots) -> Geometry {
-        let mut geometry = self.clone();
-        geometry.spheres.roots = roots;
-        geometry
-    }
-
     /// The ids of every primitive of `kind`.
     pub fn ids(&self, kind: PrimKind) -> impl Iterator<Item = PrimId> {
         (0..self.count(kind) as u32).map(move |i| PrimId::new(kind, i))

@@ -6,8 +6,9 @@ use crate::common;
 use bumpalo::Bump;
 use glam::Vec3;
 use p3trace::accel::stream::{self, Occlusions, Query};
-use p3trace::accel::{Accel, AccelKind, AccelOptions, Tracer};
+use p3trace::accel::{AccelKind, AccelOptions, Tracer};
 use p3trace::accel::{BvhBuild, BvhWidth};
+use p3trace::intersect::{self, IntersectOptions, SphereRoots};
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::{render, RenderOptions};
 use p3trace::scene::p3f::parse_text;
@@ -268,11 +269,10 @@ proptest! {
         packets in prop::collection::vec(packet(), 1..6),
     ) {
         let g = &scene.geometry;
-        let brute = Tracer::new(g, Accel::None);
+        let brute = Tracer::new(g, &AccelOptions::brute_force());
         for options in structures() {
-            let (accel, _) = Accel::build(g, &options);
-            let name = accel.name();
-            let tracer = Tracer::new(g, accel);
+            let tracer = Tracer::new(g, &options);
+            let name = tracer.name();
             for (rays, active, t_max) in &packets {
                 let packet = RayPacket::new(rays).with_t_max(*t_max).with_active(*active);
                 let hits = tracer.closest_packet(&packet);
@@ -297,11 +297,10 @@ proptest! {
         rays in prop::collection::vec(ray(), 1..48),
     ) {
         let g = &scene.geometry;
-        let brute = Tracer::new(g, Accel::None);
+        let brute = Tracer::new(g, &AccelOptions::brute_force());
         for options in structures() {
-            let (accel, _) = Accel::build(g, &options);
-            let name = accel.name();
-            let tracer = Tracer::new(g, accel);
+            let tracer = Tracer::new(g, &options);
+            let name = tracer.name();
             for (ray, t_max) in &rays {
                 for t_min in [0.0, 1e-4] {
                     let expected = brute.closest(ray, t_min, *t_max);
@@ -371,12 +370,11 @@ proptest! {
             queries.sort_by_key(|&(_, light)| light);
         }
         let g = &scene.geometry;
-        let brute = Tracer::new(g, Accel::None);
+        let brute = Tracer::new(g, &AccelOptions::brute_force());
         let arena = Bump::new();
         for options in structures() {
-            let (accel, _) = Accel::build(g, &options);
-            let name = accel.name();
-            let tracer = Tracer::new(g, accel);
+            let tracer = Tracer::new(g, &options);
+            let name = tracer.name();
             let mut hits = Vec::new();
             stream::closest(&tracer, queries.iter().map(|&(q, _)| q), |_, found| {
                 hits.extend_from_slice(found)
@@ -414,14 +412,13 @@ proptest! {
         rays in prop::collection::vec(far_ray(), 8..=8),
     ) {
         let g = &scene.geometry;
-        let brute = Tracer::new(g, Accel::None);
+        let brute = Tracer::new(g, &AccelOptions::brute_force());
         let lanes: [Ray; 8] = std::array::from_fn(|k| rays[k].0);
         let t_max = std::array::from_fn(|k| rays[k].1);
         let packet = RayPacket::new(&lanes).with_t_max(t_max);
         for options in structures() {
-            let (accel, _) = Accel::build(g, &options);
-            let name = accel.name();
-            let tracer = Tracer::new(g, accel);
+            let tracer = Tracer::new(g, &options);
+            let name = tracer.name();
             let hits = tracer.closest_packet(&packet);
             let blocked = tracer.occluded_packet(&packet);
             for (k, ray) in lanes.iter().enumerate() {
@@ -436,6 +433,54 @@ proptest! {
     }
 }
 
+/// The form of the sphere test's quadratic chosen where a tracer is built reaches every
+/// structure's kernels, one ray at a time and in packets: small spheres seen from afar,
+/// where the two forms give different distances.
+#[test]
+fn the_tracers_sphere_roots_reach_every_kernel() {
+    let text: String = (0..12)
+        .map(|i| format!("s {} 0 0 0.01\n", i as f32 * 0.05))
+        .collect();
+    let scene = parse_text(&text).unwrap();
+    let g = &scene.geometry;
+    let ray = Ray::new(Vec3::new(0.153, 0.004, 50.0), Vec3::NEG_Z);
+    let centre = Vec3::new(0.15, 0.0, 0.0);
+    let mut distances = Vec::new();
+    for roots in [SphereRoots::Precise, SphereRoots::Textbook] {
+        let expected = match roots {
+            SphereRoots::Precise => intersect::sphere(&ray, centre, 0.01, 0.0, f32::INFINITY),
+            SphereRoots::Textbook => {
+                intersect::sphere_textbook(&ray, centre, 0.01, 0.0, f32::INFINITY)
+            }
+        };
+        let intersect = IntersectOptions {
+            sphere_roots: roots,
+        };
+        for options in structures()
+            .into_iter()
+            .chain([AccelOptions::brute_force()])
+        {
+            let tracer = Tracer::new(
+                g,
+                &AccelOptions {
+                    intersect,
+                    ..options
+                },
+            );
+            let name = tracer.name();
+            let hit = tracer.closest(&ray, 0.0, f32::INFINITY).map(|h| h.t);
+            assert_eq!(hit, expected, "{name}, {roots:?}");
+            let hits = tracer.closest_packet(&RayPacket::new(&[ray; 8]));
+            assert!(
+                hits.iter().all(|h| h.map(|h| h.t) == expected),
+                "{name}, {roots:?}"
+            );
+        }
+        distances.push(expected.unwrap().to_bits());
+    }
+    assert_ne!(distances[0], distances[1], "the forms agree on this ray");
+}
+
 #[test]
 fn empty_and_single_object_scenes() {
     for text in [
@@ -447,9 +492,10 @@ fn empty_and_single_object_scenes() {
         let scene = parse_text(text).unwrap();
         let g = &scene.geometry;
         let ray = Ray::new(Vec3::new(0.0, 5.0, 0.0), Vec3::NEG_Y);
-        let expected = Tracer::new(g, Accel::None).closest(&ray, 0.0, f32::INFINITY);
+        let expected =
+            Tracer::new(g, &AccelOptions::brute_force()).closest(&ray, 0.0, f32::INFINITY);
         for options in structures() {
-            let tracer = Tracer::new(g, Accel::build(g, &options).0);
+            let tracer = Tracer::new(g, &options);
             assert_eq!(tracer.closest(&ray, 0.0, f32::INFINITY), expected, "{text}");
         }
     }

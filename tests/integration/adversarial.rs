@@ -602,3 +602,56 @@ fn a_signal_during_the_write_removes_the_partial_file() {
         assert!(files_in(&dir).is_empty(), "{:?}", files_in(&dir));
     }
 }
+
+/// Six JPEG faces of a gradient in `dir`, as a photographed skybox holds them.
+fn jpeg_skybox(dir: &Path) {
+    std::fs::create_dir_all(dir).unwrap();
+    let face = image::RgbImage::from_fn(128, 128, |x, y| {
+        let noise = (x.wrapping_mul(2_654_435_761) ^ y.wrapping_mul(40_503)) >> 24;
+        image::Rgb([(2 * x) as u8, (2 * y) as u8, noise as u8])
+    });
+    for name in p3trace::render::skybox::FACE_NAMES {
+        face.save(dir.join(format!("{name}.jpg"))).unwrap();
+    }
+}
+
+#[test]
+fn a_damaged_skybox_face_is_named_and_the_render_goes_on() {
+    let dir = scratch("adversarial_damaged_sky");
+    jpeg_skybox(&dir.join("sky"));
+    let scene = write_scene(
+        &dir,
+        "env sky\nv from 0 0 0 at 0 0 -1 up 0 1 0 angle 120 hither 0.01 resolution 32 32\n",
+    );
+    let image = dir.join("out.png");
+    let render = || {
+        p3trace(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-q",
+            "-o",
+            image.to_str().unwrap(),
+        ])
+    };
+    let sound = render();
+    assert!(sound.status.success(), "{}", stderr(&sound));
+    assert_eq!(stderr(&sound), "", "sound faces draw no warning");
+    // The back face (the camera looks down -z) cut short by 12 bytes, as a copy that lost
+    // bytes is.
+    let back = dir.join("sky/back.jpg");
+    let bytes = std::fs::read(&back).unwrap();
+    std::fs::write(&back, &bytes[..bytes.len() - 12]).unwrap();
+    let damaged = render();
+    let message = stderr(&damaged);
+    assert!(damaged.status.success(), "{message}");
+    assert!(
+        message.contains("warning: damaged skybox face")
+            && message.contains("back.jpg (premature end of data segment)"),
+        "{message}"
+    );
+    assert_eq!(
+        message.lines().count(),
+        1,
+        "only the damaged face: {message}"
+    );
+}

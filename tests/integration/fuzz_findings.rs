@@ -2,7 +2,7 @@
 //! was wrong and where it was fixed.
 
 use glam::Vec3;
-use p3trace::accel::{Accel, AccelKind, AccelOptions, BvhBuild, BvhWidth, Tracer};
+use p3trace::accel::{AccelKind, AccelOptions, BvhBuild, BvhWidth, Tracer};
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::sampler::SampleGrid;
 use p3trace::render::shade::Profile;
@@ -50,7 +50,7 @@ fn moving_sphere_leaving_the_floats_is_refused() {
 /// order; the fuzz crate's lock file follows the project's.
 #[test]
 fn ray_along_a_box_face_hits_nothing_beside_it() {
-    use p3trace::accel::{Accel, AccelOptions, Tracer};
+    use p3trace::accel::{AccelOptions, Tracer};
     use p3trace::accel::{BvhBuild, BvhWidth};
     use p3trace::ray::{Ray, RayPacket};
     let scene = parse_text("box 1 0 9.770531e-38 1e9 -1e9 -1e9").unwrap();
@@ -60,7 +60,7 @@ fn ray_along_a_box_face_hits_nothing_beside_it() {
         Vec3::new(-1.0, 0.0, 1.0).normalize(),
     );
     assert_eq!(
-        Tracer::new(g, Accel::None).closest(&ray, 0.0, f32::INFINITY),
+        Tracer::new(g, &AccelOptions::brute_force()).closest(&ray, 0.0, f32::INFINITY),
         None
     );
     for (kind, width) in [
@@ -74,8 +74,8 @@ fn ray_along_a_box_face_hits_nothing_beside_it() {
             bvh_width: width,
             ..AccelOptions::default()
         };
-        let tracer = Tracer::new(g, Accel::build(g, &options).0);
-        let name = tracer.accel.name();
+        let tracer = Tracer::new(g, &options);
+        let name = tracer.name();
         assert_eq!(tracer.closest(&ray, 0.0, f32::INFINITY), None, "{name}");
         assert_eq!(
             tracer.closest_packet(&RayPacket::new(&[ray; 8])),
@@ -157,12 +157,12 @@ fn the_grid_walk_allows_for_where_cell_of_puts_a_boundary() {
     )
     .unwrap();
     let g = &scene.geometry;
-    let brute = Tracer::new(g, Accel::None);
+    let brute = Tracer::new(g, &AccelOptions::brute_force());
     let options = AccelOptions {
         kind: AccelKind::Grid,
         ..AccelOptions::default()
     };
-    let grid = Tracer::new(g, Accel::build(g, &options).0);
+    let grid = Tracer::new(g, &options);
     let d = Vec3::new(0.57735026, 0.57735026, -0.57735026);
     let rays = [Ray::new(Vec3::splat(2.5), d); 8];
     let expected = brute.closest(&rays[0], 0.0, 3.5);
@@ -190,7 +190,7 @@ fn identical_triangles_hit_from_1e9_away_tie_as_brute_force() {
     let scene = parse_text(&triangle.repeat(9)).unwrap();
     let g = &scene.geometry;
     let ray = Ray::new(Vec3::splat(-1e9), Vec3::X);
-    let expected = Tracer::new(g, Accel::None).closest(&ray, 0.0, f32::INFINITY);
+    let expected = Tracer::new(g, &AccelOptions::brute_force()).closest(&ray, 0.0, f32::INFINITY);
     assert!(expected.is_some());
     let options = AccelOptions {
         kind: AccelKind::Bvh,
@@ -198,7 +198,7 @@ fn identical_triangles_hit_from_1e9_away_tie_as_brute_force() {
         bvh_width: Some(BvhWidth::Eight),
         ..AccelOptions::default()
     };
-    let bvh = Tracer::new(g, Accel::build(g, &options).0);
+    let bvh = Tracer::new(g, &options);
     assert_eq!(bvh.closest(&ray, 0.0, f32::INFINITY), expected);
 }
 
@@ -239,8 +239,46 @@ fn thin_cone_seen_from_1e9_away_is_missed() {
     for (text, origin) in cases {
         let scene = parse_text(text).unwrap();
         let ray = Ray::new(origin, Vec3::NEG_Y);
-        let hit = Tracer::new(&scene.geometry, Accel::None).closest(&ray, 0.0, f32::INFINITY);
+        let hit = Tracer::new(&scene.geometry, &AccelOptions::brute_force()).closest(
+            &ray,
+            0.0,
+            f32::INFINITY,
+        );
         assert_eq!(hit, None, "{text}");
+    }
+}
+
+/// Open, found by a measurement scene of 20,000 random cones (2026-12-01, while packing
+/// BVH leaves; the same at 85afa97): a pointed cone seen from 30 units away, the ray
+/// passing 0.02 from its axis near the apex, where its radius is 0.00016. The cone test
+/// reports a hit there, off the cone and outside its box: brute force and the grid find
+/// it, and the 8-wide BVH finds it or not as the shape of its tree has the box that holds
+/// the cone also hold the point, so that scene's BVH image depends on the tree.
+#[test]
+#[ignore = "open finding: a pointed cone's test hits off the cone near its apex"]
+fn pointed_cone_is_hit_only_on_its_surface() {
+    let scene = parse_text("c\n8.0116 9.6824 2.9841 0.0696\n7.6587 10.0031 3.4615 0\n").unwrap();
+    let cones = &scene.geometry.cones;
+    let (base, axis, height) = (cones.base.get(0), cones.axis.get(0), cones.height[0]);
+    let ray = Ray::new(
+        Vec3::new(30.0, 20.0, 30.0),
+        Vec3::new(-0.6189494, -0.2768653, -0.7350151),
+    );
+    let hit = Tracer::new(&scene.geometry, &AccelOptions::brute_force()).closest(
+        &ray,
+        0.0,
+        f32::INFINITY,
+    );
+    if let Some(hit) = hit {
+        let offset = ray.at(hit.t) - base;
+        let along = offset.dot(axis);
+        let radius = cones.r_base[0] * (1.0 - along / height);
+        let from_axis = (offset - along * axis).length();
+        assert!(
+            (from_axis - radius).abs() < 1e-3,
+            "hit at t = {}: {from_axis} from the axis, where the radius is {radius}",
+            hit.t
+        );
     }
 }
 
@@ -256,7 +294,7 @@ fn thin_cone_seen_from_1e9_away_is_missed() {
 #[test]
 #[ignore = "open finding: near-degenerate triangles hit outside their box"]
 fn sliver_triangle_hits_only_inside_its_box() {
-    use p3trace::accel::{Accel, AccelOptions, Tracer};
+    use p3trace::accel::{AccelOptions, Tracer};
     use p3trace::ray::Ray;
     let scene = parse_text(
         "s 0 0 0 0\np 3\n1.5 2.1331286 -3.579876\n-2.5 -1.5 -1\n-1.5 2.9661541 0\n\
@@ -268,13 +306,13 @@ fn sliver_triangle_hits_only_inside_its_box() {
         Vec3::new(-1.0, -1.5, -0.5),
         Vec3::new(0.0, 1.0, -1.0).normalize(),
     );
-    let brute = Tracer::new(g, Accel::None).closest(&ray, 0.0, f32::INFINITY);
+    let brute = Tracer::new(g, &AccelOptions::brute_force()).closest(&ray, 0.0, f32::INFINITY);
     let options = AccelOptions {
         kind: AccelKind::Bvh,
         bvh: p3trace::accel::BvhBuild::Midpoint,
         ..AccelOptions::default()
     };
-    let bvh = Tracer::new(g, Accel::build(g, &options).0);
+    let bvh = Tracer::new(g, &options);
     assert_eq!(bvh.closest(&ray, 0.0, f32::INFINITY), brute);
 }
 
@@ -286,7 +324,7 @@ fn sliver_triangle_hits_only_inside_its_box() {
 /// hit, and the reader warns of it as of a radius of 0.
 #[test]
 fn a_sphere_too_small_to_square_is_never_hit() {
-    use p3trace::accel::{Accel, AccelOptions, Tracer};
+    use p3trace::accel::{AccelOptions, Tracer};
     use p3trace::intersect::{sphere, MIN_RADIUS};
     use p3trace::ray::Ray;
     let text = "p 3 0 -1000000000 -1000000000 0 -500000000 -500000000 0 0 0\n\
@@ -304,9 +342,9 @@ fn a_sphere_too_small_to_square_is_never_hit() {
         Vec3::new(-1.0, 0.0, -1.7166798e-9),
     );
     let g = &scene.geometry;
-    let brute = Tracer::new(g, Accel::None).closest(&ray, 0.0, 1e9);
+    let brute = Tracer::new(g, &AccelOptions::brute_force()).closest(&ray, 0.0, 1e9);
     assert_eq!(brute, None);
-    let bvh = Tracer::new(g, Accel::build(g, &AccelOptions::default()).0);
+    let bvh = Tracer::new(g, &AccelOptions::default());
     assert_eq!(bvh.closest(&ray, 0.0, 1e9), None);
     // The limit is exactly where the square stays normal.
     assert_eq!(MIN_RADIUS * MIN_RADIUS, f32::MIN_POSITIVE);

@@ -19,7 +19,7 @@ use std::path::Path;
 use glam::Vec3;
 use p3trace::accel::AccelOptions;
 use p3trace::compare::{compare, Levels};
-use p3trace::intersect::{spawn_origin, Shapes, Spheres, Triangles};
+use p3trace::intersect::{spawn_origin, IntersectOptions, RayQuery, Shapes, Spheres, Triangles};
 use p3trace::ray::Ray;
 use p3trace::render::film::to_byte;
 use p3trace::render::{render, RenderOptions};
@@ -196,6 +196,11 @@ fn the_rewrite_scales_positions_and_lengths_only() {
     );
 }
 
+/// `ray` as the standard profile's primitive tests take it, from `t = 0`.
+fn query(ray: &Ray) -> RayQuery {
+    RayQuery::new(ray, 0.0, IntersectOptions::default())
+}
+
 /// A unit vector from two numbers in [0, 1).
 fn unit(a: f32, b: f32) -> Vec3 {
     let z = 2.0 * a - 1.0;
@@ -241,18 +246,18 @@ proptest! {
         let origin = centre + distance * radius * unit(a, b);
         let target = centre + 0.95 * radius * unit(c, d);
         let ray = Ray::new(origin, (target - origin).normalize());
-        let hit = spheres.intersect(0, &ray, ray.dir.recip(), 0.0, f32::INFINITY);
+        let hit = spheres.intersect(0, &query(&ray), f32::INFINITY);
         // Rejected, not passed: too many misses fail the test.
         prop_assume!(hit.is_some());
         let hit = hit.unwrap();
         let at = spheres.surface_point(0, &ray, hit.t, hit.u, hit.v);
         let out = leaving(at.normal, e, f);
         let away = Ray::new(spawn_origin(at.point, at.error, at.normal), out);
-        prop_assert_eq!(spheres.intersect(0, &away, away.dir.recip(), 0.0, f32::INFINITY), None);
+        prop_assert_eq!(spheres.intersect(0, &query(&away), f32::INFINITY), None);
         let inward = Ray::new(spawn_origin(at.point, at.error, -at.normal), -out);
         // The chord is 2 r cos, for the cosine with the inward normal.
         let chord = 2.0 * radius * out.dot(at.normal);
-        let far = spheres.intersect(0, &inward, inward.dir.recip(), 0.0, f32::INFINITY);
+        let far = spheres.intersect(0, &query(&inward), f32::INFINITY);
         prop_assert!(far.is_some_and(|h| h.t > 0.5 * chord), "{far:?}, chord {chord}");
     }
 
@@ -276,14 +281,14 @@ proptest! {
         let target = p0 + u * (p1 - p0) + v * (p2 - p0);
         let origin = target + 10.0 * size * unit(c, d);
         let ray = Ray::new(origin, (target - origin).normalize());
-        let hit = triangles.intersect(0, &ray, ray.dir.recip(), 0.0, f32::INFINITY);
+        let hit = triangles.intersect(0, &query(&ray), f32::INFINITY);
         // Rejected, not passed: too many misses fail the test.
         prop_assume!(hit.is_some());
         let hit = hit.unwrap();
         let at = triangles.surface_point(0, &ray, hit.t, hit.u, hit.v);
         for side in [at.normal, -at.normal] {
             let away = Ray::new(spawn_origin(at.point, at.error, side), leaving(side, e, c));
-            let again = triangles.intersect(0, &away, away.dir.recip(), 0.0, f32::INFINITY);
+            let again = triangles.intersect(0, &query(&away), f32::INFINITY);
             prop_assert_eq!(again, None);
         }
     }

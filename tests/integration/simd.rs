@@ -6,7 +6,9 @@
 
 use glam::Vec3;
 use p3trace::intersect::{
-    self, BoxPack8, BoxRay, BoxRay8, Intervals8, SpherePack8, SphereRoots, TrianglePack8,
+    self, BoxPack8, BoxRay, BoxRay8, Boxes, IntersectOptions, Intervals8, LeafPack, RayQuery,
+    RayQuery8, SpherePack8, SphereRoots, Spheres, TriangleHit, TriangleHit8, TrianglePack8,
+    Triangles,
 };
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::simd::{F32x8, Mask8};
@@ -194,6 +196,73 @@ fn when(active: bool, answer: Option<f32>) -> Option<f32> {
 
 const CASES: u32 = 2000;
 
+/// A packed kind's [`LeafPack`] against its scalar test (`Shapes::intersect`), bit for
+/// bit: the leaf kernel, one ray within `(t_min, t_max)` against the pack of all of
+/// `storage` (padding slots miss), and each slot against the lanes of `p` from `t_min`,
+/// as the pack holds it and as `storage` does (`Shapes::intersect8`).
+fn pack_equals_scalar<K: LeafPack>(
+    what: &str,
+    storage: &K,
+    ray: &Ray,
+    (t_min, t_max): (f32, f32),
+    p: &Packet,
+    options: IntersectOptions,
+) {
+    let n = storage.len();
+    let pack = storage.pack(0..n);
+    let query = RayQuery::new(ray, t_min, options);
+    let hits = K::leaf(&pack, &query, t_max);
+    for slot in 0..8 {
+        let scalar = (slot < n)
+            .then(|| storage.intersect(slot, &query, t_max))
+            .flatten();
+        same_hit(&format!("{what} leaf"), slot, scalar, hits);
+    }
+    let (rays, _, hi, active) = p.soa();
+    let rays = RayPacket { t_min, ..rays };
+    let query = RayQuery8 {
+        packet: &rays,
+        options,
+    };
+    for slot in 0..n {
+        let in_pack = K::slot8(&pack, slot, &query, hi, active);
+        let in_storage = storage.intersect8(slot, &query, hi, active);
+        for (k, ray) in p.rays.iter().enumerate() {
+            let lane = RayQuery::new(ray, t_min, options);
+            let scalar = storage
+                .intersect(slot, &lane, p.t_max[k])
+                .filter(|_| p.active(k));
+            same_hit(&format!("{what} slot {slot}"), k, scalar, in_pack);
+            same_hit(&format!("{what} {slot}, intersect8"), k, scalar, in_storage);
+        }
+    }
+}
+
+/// [`same`] for `t`, `u` and `v`.
+fn same_hit(what: &str, lane: usize, expected: Option<TriangleHit>, hits: TriangleHit8) {
+    same(
+        &format!("{what} t"),
+        lane,
+        expected.map(|h| h.t),
+        hits.hit,
+        hits.t,
+    );
+    same(
+        &format!("{what} u"),
+        lane,
+        expected.map(|h| h.u),
+        hits.hit,
+        hits.u,
+    );
+    same(
+        &format!("{what} v"),
+        lane,
+        expected.map(|h| h.v),
+        hits.hit,
+        hits.v,
+    );
+}
+
 /// Both forms of the sphere's quadratic.
 fn roots() -> impl Strategy<Value = SphereRoots> {
     prop_oneof![Just(SphereRoots::Precise), Just(SphereRoots::Textbook)]
@@ -328,6 +397,54 @@ proptest! {
             same("triangle leaf u", i, scalar.map(|h| h.u), hits.hit, hits.u);
             same("triangle leaf v", i, scalar.map(|h| h.v), hits.hit, hits.v);
         }
+    }
+
+    #[test]
+    fn sphere_pack_equals_scalar(
+        ray in ray(),
+        limits in interval(),
+        p in packet(),
+        spheres in prop::collection::vec((point(), radius()), 0..=8),
+        roots in roots(),
+    ) {
+        let mut storage = Spheres::default();
+        for (centre, r) in spheres {
+            storage.centre.push(centre);
+            storage.radius.push(r);
+            storage.material.push(0);
+        }
+        let options = IntersectOptions { sphere_roots: roots };
+        pack_equals_scalar("sphere pack", &storage, &ray, limits, &p, options);
+    }
+
+    #[test]
+    fn triangle_pack_equals_scalar(
+        ray in ray(),
+        limits in interval(),
+        p in packet(),
+        triangles in prop::collection::vec(triangle(), 0..=8),
+    ) {
+        let mut storage = Triangles::default();
+        for [p0, e1, e2] in triangles {
+            storage.push([p0, p0 + e1, p0 + e2], None, 0);
+        }
+        pack_equals_scalar("triangle pack", &storage, &ray, limits, &p, IntersectOptions::default());
+    }
+
+    #[test]
+    fn box_pack_equals_scalar(
+        ray in ray(),
+        limits in interval(),
+        p in packet(),
+        boxes in prop::collection::vec(aabb(), 0..=8),
+    ) {
+        let mut storage = Boxes::default();
+        for (lo, hi) in boxes {
+            storage.min.push(lo);
+            storage.max.push(hi);
+            storage.material.push(0);
+        }
+        pack_equals_scalar("box pack", &storage, &ray, limits, &p, IntersectOptions::default());
     }
 
     #[test]

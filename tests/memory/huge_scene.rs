@@ -4,7 +4,7 @@
 
 use crate::counting;
 use glam::Vec3;
-use p3trace::accel::{Accel, AccelOptions, Tracer};
+use p3trace::accel::{AccelOptions, Tracer};
 use p3trace::scene::{CameraSpec, Material, Scene};
 
 /// The lattice: 250 x 200 x 200 spheres of radius 0.25, one unit apart.
@@ -71,8 +71,8 @@ pub fn ten_million_spheres_render_within_the_stated_memory() {
         scene.camera.from,
         Vec3::new(0.013, -0.007, -1.0).normalize(),
     );
-    let brute = Tracer::new(g, Accel::None).closest(&ray, 0.0, f32::INFINITY);
-    let bvh = Tracer::new(g, Accel::build(g, &AccelOptions::default()).0);
+    let brute = Tracer::new(g, &AccelOptions::brute_force()).closest(&ray, 0.0, f32::INFINITY);
+    let bvh = Tracer::new(g, &AccelOptions::default());
     assert!(brute.is_some());
     assert_eq!(bvh.closest(&ray, 0.0, f32::INFINITY), brute);
 }

@@ -1,5 +1,6 @@
 //! The tests that count the heap: ten million spheres and ten million triangles within
-//! the memory `docs/limits.md` states, and a warm tile that asks the allocator for nothing.
+//! the memory `docs/limits.md` states, a course render within a standard one's, and a
+//! warm tile that asks the allocator for nothing.
 //! They share a counting allocator, so they run one after another in a process of their
 //! own: no libtest harness (`harness = false` in `Cargo.toml`), whose threads would run
 //! them side by side.
@@ -7,12 +8,13 @@
 mod counting;
 mod huge_mesh;
 mod huge_scene;
+mod profiles;
 mod tile_allocations;
 
 #[global_allocator]
 static ALLOCATOR: counting::Counting = counting::Counting;
 
-const TESTS: [(&str, fn()); 3] = [
+const TESTS: [(&str, fn()); 4] = [
     (
         "huge_mesh::ten_million_triangles_render_within_the_stated_memory",
         huge_mesh::ten_million_triangles_render_within_the_stated_memory,
@@ -20,6 +22,10 @@ const TESTS: [(&str, fn()); 3] = [
     (
         "huge_scene::ten_million_spheres_render_within_the_stated_memory",
         huge_scene::ten_million_spheres_render_within_the_stated_memory,
+    ),
+    (
+        "profiles::a_course_render_copies_no_geometry",
+        profiles::a_course_render_copies_no_geometry,
     ),
     (
         "tile_allocations::a_warm_tile_allocates_nothing",

@@ -20,10 +20,10 @@ use glam::Vec3;
 
 use super::hit::ClosestHit;
 use super::stack::Stack;
-use crate::intersect::{beyond, Aabb, BoxRay};
+use super::structure::Structure;
+use crate::intersect::{beyond, Aabb, BoxRay, RayQuery};
 use crate::plural::count;
 use crate::prim::PrimId;
-use crate::ray::Ray;
 use crate::scene::Geometry;
 pub use build::MAX_LEAF;
 
@@ -164,19 +164,14 @@ impl Bvh2 {
     pub fn into_parts(self) -> (Vec<Node>, Vec<PrimId>) {
         (self.nodes, self.prims)
     }
+}
 
-    pub fn closest(
-        &self,
-        geometry: &Geometry,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        closest: &mut ClosestHit,
-    ) {
+impl Structure for Bvh2 {
+    fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
         let Some(root) = self.nodes.first() else {
             return;
         };
-        let box_ray = BoxRay::new(ray.origin, inv_dir);
+        let (t_min, box_ray) = (query.t_min, BoxRay::new(query.ray.origin, query.inv_dir));
         let Some(t_root) = root.entry(&box_ray, t_min, closest.limit()) else {
             return;
         };
@@ -192,7 +187,7 @@ impl Bvh2 {
                 if node.count > 0 {
                     let first = node.offset as usize;
                     for &prim in &self.prims[first..first + node.count as usize] {
-                        closest.test(geometry, prim, ray, inv_dir, t_min);
+                        closest.test(geometry, prim, query);
                     }
                     break;
                 }
@@ -218,18 +213,11 @@ impl Bvh2 {
         }
     }
 
-    pub fn occluded(
-        &self,
-        geometry: &Geometry,
-        ray: &Ray,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> bool {
+    fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
-        let box_ray = BoxRay::new(ray.origin, inv_dir);
+        let (t_min, box_ray) = (query.t_min, BoxRay::new(query.ray.origin, query.inv_dir));
         let mut stack = Stack::<u32, MAX_DEPTH>::new();
         stack.push(0);
         while let Some(index) = stack.pop() {
@@ -241,11 +229,7 @@ impl Bvh2 {
                 let first = node.offset as usize;
                 let blocked = self.prims[first..first + node.count as usize]
                     .iter()
-                    .any(|&prim| {
-                        geometry
-                            .intersect(prim, ray, inv_dir, t_min, t_max)
-                            .is_some()
-                    });
+                    .any(|&prim| geometry.intersect(prim, query, t_max).is_some());
                 if blocked {
                     return true;
                 }
@@ -256,7 +240,9 @@ impl Bvh2 {
         }
         false
     }
+}
 
+impl Bvh2 {
     pub fn stats(&self) -> Bvh2Stats {
         // Counted in place: a list of the leaves took 8 bytes a primitive.
         let leaves = || self.nodes.iter().filter(|n| n.count > 0);

@@ -9,9 +9,8 @@ use std::ops::Range;
 
 use glam::Vec3;
 
-use super::node::{
-    leaf_ref, ChildRef, Node8, MAX_LEAF_PRIMS, MAX_PRIMS, RUN, SPHERES, TRIANGLES, WIDTH,
-};
+use super::leaves::{count_index, Leaves, PackCounts};
+use super::node::{leaf_ref, Node8, MAX_LEAF_PRIMS, MAX_PRIMS, RUN, WIDTH};
 use super::Bvh8;
 use crate::accel::bvh2::{Bvh2, Node};
 use crate::intersect::BoxPack8;
@@ -56,11 +55,7 @@ impl Bvh8 {
         let mut tree = Bvh8 {
             nodes: Vec::with_capacity(size.nodes),
             prims: Vec::new(),
-            triangles: Vec::with_capacity(size.triangles),
-            spheres: Vec::with_capacity(size.spheres),
-            sphere_roots: geometry.spheres.roots,
-            triangle_ids: Vec::with_capacity(size.triangles),
-            sphere_ids: Vec::with_capacity(size.spheres),
+            leaves: Leaves::with_capacity(&size.packs),
             depth: 0,
             build,
             binary: stats,
@@ -92,7 +87,7 @@ impl Bvh8 {
         let mut depth = 1;
         for (k, kid) in kids.iter().enumerate() {
             let child = match binary.pack_kind(kid) {
-                Some(kind) => self.pack(geometry, kind, &binary.prims[kid.range.clone()]),
+                Some(_) => self.leaves.push(geometry, &binary.prims[kid.range.clone()]),
                 None if binary.nodes[kid.node].is_leaf() => {
                     leaf_ref(RUN, kid.range.len(), kid.range.start)
                 }
@@ -105,22 +100,6 @@ impl Bvh8 {
             self.nodes[index].child[k] = child;
         }
         depth
-    }
-
-    /// Stores the primitives `ids`, all of `kind`, as one pack.
-    fn pack(&mut self, geometry: &Geometry, kind: PrimKind, ids: &[PrimId]) -> ChildRef {
-        let mut lanes = [ids[0]; 8];
-        lanes[..ids.len()].copy_from_slice(ids);
-        let indices = ids.iter().map(|id| id.index());
-        if kind == PrimKind::Triangle {
-            self.triangles.push(geometry.triangles.pack(indices));
-            self.triangle_ids.push(lanes);
-            leaf_ref(TRIANGLES, ids.len(), self.triangles.len() - 1)
-        } else {
-            self.spheres.push(geometry.spheres.pack(indices));
-            self.sphere_ids.push(lanes);
-            leaf_ref(SPHERES, ids.len(), self.spheres.len() - 1)
-        }
     }
 }
 
@@ -140,12 +119,11 @@ struct Binary<'a> {
     prims: &'a [PrimId],
 }
 
-/// What an 8-wide tree holds: its nodes, triangle packs and sphere packs.
+/// What an 8-wide tree holds: its nodes, and its packs of each packed kind.
 #[derive(Default)]
 struct Size {
     nodes: usize,
-    triangles: usize,
-    spheres: usize,
+    packs: PackCounts,
 }
 
 impl Binary<'_> {
@@ -198,21 +176,20 @@ impl Binary<'_> {
         size.nodes += 1;
         for kid in self.expand(start) {
             match self.pack_kind(&kid) {
-                Some(PrimKind::Triangle) => size.triangles += 1,
-                Some(_) => size.spheres += 1,
+                Some(kind) => size.packs[count_index(kind)] += 1,
                 None if self.nodes[kid.node].is_leaf() => {}
                 None => self.size(self.children(&kid), size),
             }
         }
     }
 
-    /// The kind of a subtree that becomes one pack: at most [`PACK`] triangles, or
-    /// spheres.
+    /// The kind of a subtree that becomes one pack: at most [`PACK`] primitives of one
+    /// packed kind.
     fn pack_kind(&self, kid: &Kid) -> Option<PrimKind> {
         let prims = &self.prims[kid.range.clone()];
         let kind = prims.first()?.kind();
-        let packable = matches!(kind, PrimKind::Triangle | PrimKind::Sphere);
-        (packable && prims.len() <= PACK && prims.iter().all(|p| p.kind() == kind)).then_some(kind)
+        let packable = kind.is_packed() && prims.len() <= PACK;
+        (packable && prims.iter().all(|p| p.kind() == kind)).then_some(kind)
     }
 
     /// Nodes that become leaves of the 8-wide tree.
@@ -236,13 +213,12 @@ mod tests {
             while let Some((child, [lo, hi])) = stack.pop() {
                 if child & LEAF != 0 {
                     let (kind, count, index) = leaf_parts(child);
-                    let ids: Vec<PrimId> = match kind {
-                        TRIANGLES => self.triangle_ids[index][..count].to_vec(),
-                        SPHERES => self.sphere_ids[index][..count].to_vec(),
-                        _ => self.prims[index..index + count].to_vec(),
+                    let ids = match kind {
+                        RUN => &self.prims[index..index + count],
+                        _ => &self.leaves.ids(child)[..count],
                     };
                     for id in ids {
-                        let k = self.prims.iter().position(|&p| p == id).unwrap();
+                        let k = self.prims.iter().position(|p| p == id).unwrap();
                         seen[k] += 1;
                     }
                     continue;

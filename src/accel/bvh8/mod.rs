@@ -1,9 +1,10 @@
 //! The 8-wide BVH, converted from a binary one (`collapse.rs`): each node holds the boxes
 //! of up to eight children side by side (one array per coordinate), so that one ray tests
-//! all of them at once (`node.rs`). A subtree of at most eight triangles, or eight
-//! spheres, becomes one leaf whose primitives are stored side by side too
-//! ([`TrianglePack8`], [`SpherePack8`]) and tested together; other leaves are the binary
-//! tree's, tested one primitive at a time.
+//! all of them at once (`node.rs`). A subtree of at most eight primitives of one `packed`
+//! kind (`prim_kinds!`) becomes one leaf whose primitives are stored side by side too,
+//! in the kind's [`LeafPack`](crate::intersect::LeafPack) (`leaves.rs`), and tested
+//! together; other leaves are the binary tree's, tested one primitive at a time. No file
+//! here names a kind: the packs and their dispatch are generated from the list.
 //!
 //! Traversal (`traverse.rs` for single rays, `packet.rs` for eight rays together) visits
 //! the hit children nearest first, with their entry distances on the stack; popped
@@ -11,28 +12,27 @@
 //! the answer is brute force's).
 
 mod collapse;
+mod leaves;
 mod node;
 mod packet;
 mod traverse;
 
 use super::bvh2::{Bvh2Stats, BvhBuild};
-use crate::intersect::{SpherePack8, SphereRoots, TrianglePack8};
+use super::hit::ClosestHit;
+use super::structure::Structure;
+use crate::intersect::{RayQuery, RayQuery8};
 use crate::plural::count;
 use crate::prim::PrimId;
+use crate::scene::Geometry;
+use leaves::Leaves;
 use node::{Node8, WIDTH};
 
-/// The collapsed tree: `nodes[0]` is the root; leaves index `prims` or the packs.
+/// The collapsed tree: `nodes[0]` is the root; leaves index `prims` or `leaves`' packs.
 #[derive(Clone, Debug)]
 pub struct Bvh8 {
     nodes: Vec<Node8>,
     prims: Vec<PrimId>,
-    triangles: Vec<TrianglePack8>,
-    spheres: Vec<SpherePack8>,
-    /// How the sphere packs are tested: the scene's spheres' form of the quadratic.
-    sphere_roots: SphereRoots,
-    /// The primitives of each pack, lane by lane (`triangles`, then `spheres`).
-    triangle_ids: Vec<[PrimId; 8]>,
-    sphere_ids: Vec<[PrimId; 8]>,
+    leaves: Leaves,
     /// The longest path from the root to a leaf, in nodes (statistics).
     depth: usize,
     build: BvhBuild,
@@ -43,6 +43,36 @@ pub struct Bvh8 {
 /// Entries on the traversal stack: each level pushes at most `WIDTH - 1`, and the binary
 /// trees stay under `bvh2::MAX_DEPTH` levels, which bounds the collapsed ones too.
 const STACK_SIZE: usize = (WIDTH - 1) * super::bvh2::MAX_DEPTH + 1;
+
+/// The walks from the root: one ray's in `traverse.rs`, a packet's in `packet.rs`.
+impl Structure for Bvh8 {
+    #[inline]
+    fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
+        if !self.nodes.is_empty() {
+            self.closest_from(0, geometry, query, closest);
+        }
+    }
+
+    #[inline]
+    fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
+        !self.nodes.is_empty() && self.occluded_from(0, geometry, query, t_max)
+    }
+
+    #[inline]
+    fn closest_packet(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery8,
+        closest: &mut [ClosestHit; 8],
+    ) {
+        self.packet_closest(geometry, query, closest);
+    }
+
+    #[inline]
+    fn occluded_packet(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
+        self.packet_occluded(geometry, query)
+    }
+}
 
 impl Bvh8 {
     /// The build the binary tree it was collapsed from ran.
@@ -74,9 +104,6 @@ impl Bvh8 {
     pub fn memory(&self) -> usize {
         std::mem::size_of_val(&self.nodes[..])
             + std::mem::size_of_val(&self.prims[..])
-            + std::mem::size_of_val(&self.triangles[..])
-            + std::mem::size_of_val(&self.spheres[..])
-            + std::mem::size_of_val(&self.triangle_ids[..])
-            + std::mem::size_of_val(&self.sphere_ids[..])
+            + self.leaves.memory()
     }
 }

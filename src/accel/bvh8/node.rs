@@ -2,25 +2,41 @@
 //! encoding of a reference to a node or to a leaf.
 
 use crate::intersect::{BoxPack8, BoxRay};
+use crate::prim::PrimKind;
 
 /// Children per node.
 pub const WIDTH: usize = 8;
 
-/// A child reference: a node index, or a leaf (the top bit) with its kind in bits 29..31,
-/// its primitive count less one in bits 26..29, and below, its first primitive (a run of
+/// A child reference: a node index, or a leaf (the top bit) with its kind in the
+/// [`KIND_BITS`] bits below ([`RUN`], or a packed kind's [`pack_code`]), its primitive
+/// count less one in the three bits below those, and below, its first primitive (a run of
 /// `prims`) or its pack.
 pub type ChildRef = u32;
 pub const LEAF: u32 = 1 << 31;
-const KIND_SHIFT: u32 = 29;
-const COUNT_SHIFT: u32 = 26;
+/// Enough bits for a run and every packed kind: two for up to three packed kinds.
+const KIND_BITS: u32 = u32::BITS - (PrimKind::PACKED.len() as u32).leading_zeros();
+const KIND_SHIFT: u32 = 31 - KIND_BITS;
+const COUNT_SHIFT: u32 = KIND_SHIFT - 3;
 const INDEX_MASK: u32 = (1 << COUNT_SHIFT) - 1;
-/// The kinds of leaf.
+/// The kind of a leaf that is a run of `prims`, tested one primitive at a time.
 pub const RUN: u32 = 0;
-pub const TRIANGLES: u32 = 1;
-pub const SPHERES: u32 = 2;
 /// The most primitives a leaf may hold, and the most a tree may hold, to be encoded.
 pub const MAX_LEAF_PRIMS: usize = 1 << (KIND_SHIFT - COUNT_SHIFT);
 pub const MAX_PRIMS: usize = INDEX_MASK as usize + 1;
+
+/// The leaf kind of a pack of the packed kind `kind`: one more than its place in
+/// [`PrimKind::PACKED`]. A kind that is not packed has none (a compile-time error where
+/// it is asked for in a constant).
+pub const fn pack_code(kind: PrimKind) -> u32 {
+    let mut i = 0;
+    while i < PrimKind::PACKED.len() {
+        if PrimKind::PACKED[i] as u8 == kind as u8 {
+            return i as u32 + 1;
+        }
+        i += 1;
+    }
+    panic!("the kind is not packed")
+}
 
 pub fn leaf_ref(kind: u32, count: usize, index: usize) -> ChildRef {
     LEAF | kind << KIND_SHIFT | ((count as u32 - 1) << COUNT_SHIFT) | index as u32

@@ -6,13 +6,11 @@
 //! average) tests each primitive against all the lanes at once, by the primitives' packet
 //! kernels, rather than each lane against all eight slots of the pack.
 
-use super::node::{leaf_parts, ChildRef, Node8, LEAF, SPHERES, TRIANGLES};
+use super::node::{ChildRef, Node8, LEAF};
 use super::{Bvh8, STACK_SIZE};
 use crate::accel::hit::{for_lanes, ClosestHit};
 use crate::accel::stack::Stack;
-use crate::intersect::{beyond8, sphere_packet, triangle_packet, BoxRay8, RayRange, TriangleHit8};
-use crate::prim::PrimId;
-use crate::ray::{Hit, RayPacket};
+use crate::intersect::{beyond8, BoxRay8, RayQuery8, RayRange};
 use crate::scene::Geometry;
 use crate::simd::{F32x8, Mask8};
 
@@ -20,22 +18,23 @@ use crate::simd::{F32x8, Mask8};
 const SINGLE_RAY_LANES: u32 = 2;
 
 impl Bvh8 {
-    /// The closest hits of the active lanes of `packet`, traced together: each node's children are tested against all the packet's rays at once,
-    /// visited nearest first (by the nearest lane's entry) with their lanes and that
+    /// The closest hits of the active lanes of `query`'s packet, traced together: each
+    /// node's children are tested against all the packet's rays at once, visited nearest
+    /// first (by the nearest lane's entry) with their lanes and that
     /// entry on the stack. An entry is skipped when it lies beyond every lane's closest
     /// hit; a subtree left with few lanes is finished one ray at a time. Each lane's
-    /// answer is the one [`Bvh8::closest`] gives.
-    pub fn closest_packet(
+    /// answer is the one single-ray walk ([`Bvh8::closest_from`]) gives.
+    pub(super) fn packet_closest(
         &self,
         geometry: &Geometry,
-        packet: &RayPacket,
+        query: &RayQuery8,
         closest: &mut [ClosestHit; 8],
     ) {
-        let (rays, active, t_min) = (packet.rays, packet.active, packet.t_min);
+        let packet = query.packet;
+        let (active, t_min) = (packet.active, packet.t_min);
         if self.nodes.is_empty() || active == 0 {
             return;
         }
-        let inv_dir = packet.inv_dir_lanes();
         let box_rays = BoxRay8::new(packet);
         let lanes_t_min = F32x8::splat(t_min);
         let mut limit = lanes_of(closest, ClosestHit::limit);
@@ -50,31 +49,18 @@ impl Bvh8 {
             if lanes & !beyond8(F32x8::splat(t_entry), limit).bitmask() == 0 {
                 continue;
             }
-            if packs_fewer(child, lanes) {
-                self.closest_in_pack(packet, child, lanes, closest);
+            let leaf = child & LEAF != 0;
+            if leaf && self.leaves.closest_packet(child, query, lanes, closest) {
                 limit = lanes_of(closest, ClosestHit::limit);
                 continue;
             }
-            if child & LEAF != 0 || lanes.count_ones() <= SINGLE_RAY_LANES {
+            if leaf || lanes.count_ones() <= SINGLE_RAY_LANES {
                 for_lanes(lanes, |k| {
-                    if child & LEAF != 0 {
-                        self.closest_in_leaf(
-                            geometry,
-                            child,
-                            &rays[k],
-                            inv_dir[k],
-                            t_min,
-                            &mut closest[k],
-                        );
+                    let lane = query.lane(k);
+                    if leaf {
+                        self.closest_in_leaf(geometry, child, &lane, &mut closest[k]);
                     } else {
-                        self.closest_from(
-                            child,
-                            geometry,
-                            &rays[k],
-                            inv_dir[k],
-                            t_min,
-                            &mut closest[k],
-                        );
+                        self.closest_from(child, geometry, &lane, &mut closest[k]);
                     }
                 });
                 limit = lanes_of(closest, ClosestHit::limit);
@@ -99,15 +85,14 @@ impl Bvh8 {
         }
     }
 
-    /// The active lanes of `packet` whose ray is blocked within its interval, as a bit
-    /// mask, the rays traced together as in [`Bvh8::closest_packet`].
-    pub fn occluded_packet(&self, geometry: &Geometry, packet: &RayPacket) -> u8 {
-        let (rays, active) = (packet.rays, packet.active);
-        let (t_min, t_max) = (packet.t_min, &packet.t_max);
+    /// The active lanes of `query`'s packet whose ray is blocked within its interval, as
+    /// a bit mask, the rays traced together as in [`Bvh8::packet_closest`].
+    pub(super) fn packet_occluded(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
+        let packet = query.packet;
+        let (active, t_min, t_max) = (packet.active, packet.t_min, &packet.t_max);
         if self.nodes.is_empty() || active == 0 {
             return 0;
         }
-        let inv_dir = packet.inv_dir_lanes();
         let box_rays = BoxRay8::new(packet);
         let (lanes_t_min, lanes_t_max) = (F32x8::splat(t_min), F32x8::from_array(*t_max));
         let range = box_rays.range(active);
@@ -120,19 +105,26 @@ impl Bvh8 {
             if lanes == 0 {
                 continue;
             }
-            if packs_fewer(child, lanes) {
-                blocked |= self.blocks_in_pack(packet, child, lanes);
+            let leaf = child & LEAF != 0;
+            let in_pack = if leaf {
+                self.leaves.blocks_packet(child, query, lanes)
+            } else {
+                None
+            };
+            if let Some(hit) = in_pack {
+                blocked |= hit;
                 if blocked == active {
                     break;
                 }
                 continue;
             }
-            if child & LEAF != 0 || lanes.count_ones() <= SINGLE_RAY_LANES {
+            if leaf || lanes.count_ones() <= SINGLE_RAY_LANES {
                 for_lanes(lanes, |k| {
-                    let hit = if child & LEAF != 0 {
-                        self.blocks(geometry, child, &rays[k], inv_dir[k], t_min, t_max[k])
+                    let lane = query.lane(k);
+                    let hit = if leaf {
+                        self.blocks(geometry, child, &lane, t_max[k])
                     } else {
-                        self.occluded_from(child, geometry, &rays[k], inv_dir[k], t_min, t_max[k])
+                        self.occluded_from(child, geometry, &lane, t_max[k])
                     };
                     if hit {
                         blocked |= 1 << k;
@@ -156,102 +148,10 @@ impl Bvh8 {
         }
         blocked
     }
-
-    /// The primitives of the pack leaf `child` against the lanes `lanes` of `packet`, one
-    /// primitive against every lane at a time; each lane keeps its winner, as
-    /// [`Bvh8::closest_in_leaf`] has it keep (the tie rule does not depend on order).
-    fn closest_in_pack(
-        &self,
-        packet: &RayPacket,
-        child: ChildRef,
-        lanes: u8,
-        closest: &mut [ClosestHit; 8],
-    ) {
-        let mut bound = lanes_of(closest, ClosestHit::bound);
-        let (_, count, _) = leaf_parts(child);
-        for slot in 0..count {
-            let (hits, prim) = self.pack_slot(packet, child, slot, bound, lanes);
-            let hit = hits.hit.bitmask();
-            if hit != 0 {
-                let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
-                for_lanes(hit, |k| {
-                    closest[k].offer(Hit {
-                        t: t[k],
-                        prim,
-                        u: u[k],
-                        v: v[k],
-                    })
-                });
-                bound = lanes_of(closest, ClosestHit::bound);
-            }
-        }
-    }
-
-    /// The lanes of `lanes` that a primitive of the pack leaf `child` blocks, one
-    /// primitive against every lane at a time, as [`Bvh8::blocks`] answers each.
-    fn blocks_in_pack(&self, packet: &RayPacket, child: ChildRef, lanes: u8) -> u8 {
-        let t_max = F32x8::from_array(packet.t_max);
-        let (_, count, _) = leaf_parts(child);
-        let mut blocked = 0;
-        for slot in 0..count {
-            let (hits, _) = self.pack_slot(packet, child, slot, t_max, lanes & !blocked);
-            blocked |= hits.hit.bitmask();
-            if blocked == lanes {
-                break;
-            }
-        }
-        blocked
-    }
-
-    /// The primitive in slot `slot` of the pack leaf `child` against the lanes `lanes` of
-    /// `packet` within `(t_min, t_max)` (spheres with `u` and `v` zero), and its id.
-    #[inline(always)]
-    fn pack_slot(
-        &self,
-        packet: &RayPacket,
-        child: ChildRef,
-        slot: usize,
-        t_max: F32x8,
-        lanes: u8,
-    ) -> (TriangleHit8, PrimId) {
-        let (kind, _, index) = leaf_parts(child);
-        let t_min = F32x8::splat(packet.t_min);
-        if kind == TRIANGLES {
-            let pack = &self.triangles[index];
-            let (p0, e1, e2) = (pack.p0.lane(slot), pack.e1.lane(slot), pack.e2.lane(slot));
-            let hits = triangle_packet(packet, p0, e1, e2, t_min, t_max, lanes);
-            (hits, self.triangle_ids[index][slot])
-        } else {
-            let pack = &self.spheres[index];
-            let (centre, radius) = (pack.centre.lane(slot), pack.radius.to_array()[slot]);
-            let (hit, t) = sphere_packet(
-                packet,
-                centre,
-                radius,
-                self.sphere_roots,
-                t_min,
-                t_max,
-                lanes,
-            );
-            let (u, v) = (F32x8::ZERO, F32x8::ZERO);
-            (TriangleHit8 { hit, t, u, v }, self.sphere_ids[index][slot])
-        }
-    }
-}
-
-/// Whether `child` is a leaf of packed primitives holding fewer of them than `lanes`
-/// has lanes: then testing each primitive against all lanes makes fewer 8-lane tests than
-/// testing each lane against every slot of the pack.
-fn packs_fewer(child: ChildRef, lanes: u8) -> bool {
-    if child & LEAF == 0 {
-        return false;
-    }
-    let (kind, count, _) = leaf_parts(child);
-    (kind == TRIANGLES || kind == SPHERES) && count < lanes.count_ones() as usize
 }
 
 /// `distance` of each lane's closest hit so far, as eight lanes.
-fn lanes_of(closest: &[ClosestHit; 8], distance: impl Fn(&ClosestHit) -> f32) -> F32x8 {
+pub(super) fn lanes_of(closest: &[ClosestHit; 8], distance: impl Fn(&ClosestHit) -> f32) -> F32x8 {
     F32x8::from_array(closest.each_ref().map(distance))
 }
 
