@@ -1,10 +1,11 @@
 //! The stream renderer: a tile's samples traced breadth first, one depth at a time. Each
-//! depth is a [`Queue`] (structure of arrays in the tile's arena): its rays are traced as
-//! packets of eight, their hits' shadow rays are gathered per light and traced as packets,
-//! the hits are shaded, and the rays they spawn make the next depth's queue. Once the
-//! deepest queue is shaded, colours flow back up: each ray's colour, clamped if it hit
-//! something, is added to its parent's with its weight, in the order the scalar
-//! [`Shader::trace`] adds them, so the image is the scalar one byte for byte.
+//! depth is a [`Queue`] (structure of arrays in the tile's arena): its rays, then their
+//! hits' shadow rays light by light, are traced as packets of eight by the stream
+//! scheduler ([`crate::accel::stream`], which `bench` measures), the hits are shaded,
+//! and the rays they spawn make the next depth's queue. Once the deepest queue is
+//! shaded, colours flow back up: each ray's colour, clamped if it hit something, is
+//! added to its parent's with its weight, in the order the scalar [`Shader::trace`] adds
+//! them, so the image is the scalar one byte for byte.
 
 use bumpalo::collections::Vec as ArenaVec;
 use bumpalo::Bump;
@@ -209,12 +210,8 @@ impl<'a> ShadowQueue<'a> {
     /// [`Shader::local`] asks.
     fn of(&self, i: usize, light: usize) -> Option<(ShadowRay, bool)> {
         let slot = self.slot[i * self.lights + light];
-        (slot != Self::NONE).then(|| {
-            (
-                self.rays.queries()[slot as usize],
-                self.blocked[slot as usize],
-            )
-        })
+        let rays = self.rays.queries();
+        (slot != Self::NONE).then(|| (rays[slot as usize], self.blocked[slot as usize]))
     }
 }
 
