@@ -1,10 +1,11 @@
 //! The stream renderer: a tile's samples traced breadth first, one depth at a time. Each
-//! depth is a [`Queue`] (structure of arrays in the tile's arena): its rays are traced as
-//! packets of eight, their hits' shadow rays are gathered per light and traced as packets,
-//! the hits are shaded, and the rays they spawn make the next depth's queue. Once the
-//! deepest queue is shaded, colours flow back up: each ray's colour, clamped if it hit
-//! something, is added to its parent's with its weight, in the order the scalar
-//! [`Shader::trace`] adds them, so the image is the scalar one byte for byte.
+//! depth is a [`Queue`] (structure of arrays in the tile's arena): its rays, then their
+//! hits' shadow rays light by light, are traced as packets of eight by the stream
+//! scheduler ([`crate::accel::stream`], which `bench` measures), the hits are shaded,
+//! and the rays they spawn make the next depth's queue. Once the deepest queue is
+//! shaded, colours flow back up: each ray's colour, clamped if it hit something, is
+//! added to its parent's with its weight, in the order the scalar [`Shader::trace`] adds
+//! them, so the image is the scalar one byte for byte.
 
 use bumpalo::collections::Vec as ArenaVec;
 use bumpalo::Bump;
@@ -12,7 +13,8 @@ use glam::Vec3;
 
 use super::sampler::Sample;
 use super::shade::{RayCounts, RayKind, Shader, ShadowRay, Surface};
-use crate::ray::{Ray, RayPacket};
+use crate::accel::stream::{self, Occlusions, Query};
+use crate::ray::Ray;
 
 /// The rays of one depth, and what they bring back.
 pub(super) struct Queue<'a> {
@@ -122,13 +124,9 @@ fn shade_depth<'a>(
 ) -> Queue<'a> {
     let n = queue.len();
     let mut hits = ArenaVec::with_capacity_in(n, arena);
-    for chunk in queue.rays.chunks(8) {
-        let (lanes, active) = lanes_of(chunk, |ray| *ray);
-        let found = shader
-            .tracer
-            .closest_packet(&RayPacket::new(&lanes).with_active(active));
-        hits.extend_from_slice(&found[..chunk.len()]);
-    }
+    stream::closest(shader.tracer, &queue.rays, |_, found| {
+        hits.extend_from_slice(found)
+    });
     let surfaces = ArenaVec::from_iter_in(
         hits.iter()
             .zip(&queue.rays)
@@ -163,21 +161,21 @@ fn shade_depth<'a>(
     next
 }
 
-/// The shadow rays of one depth's hits, light by light, and whether each is blocked.
+/// The shadow rays of one depth's hits and whether each is blocked.
 struct ShadowQueue<'a> {
     lights: usize,
     /// Entry `i * lights + light`: the index in `rays` of hit `i`'s shadow ray to
     /// `light`, or [`ShadowQueue::NONE`] when it has none.
     slot: ArenaVec<'a, u32>,
-    rays: ArenaVec<'a, ShadowRay>,
+    rays: Occlusions<'a, ShadowRay>,
     blocked: ArenaVec<'a, bool>,
 }
 
 impl<'a> ShadowQueue<'a> {
     const NONE: u32 = u32::MAX;
 
-    /// Builds every hit's shadow ray to every light, grouped by light so that a packet's
-    /// rays head for one point, and traces them as packets.
+    /// Builds every hit's shadow ray to every light and traces them as a stream, which
+    /// groups them by light.
     fn trace(
         shader: &Shader,
         arena: &'a Bump,
@@ -189,25 +187,17 @@ impl<'a> ShadowQueue<'a> {
             std::iter::repeat_n(Self::NONE, surfaces.len() * lights),
             arena,
         );
-        let mut rays = ArenaVec::with_capacity_in(slot.len(), arena);
+        let mut rays = Occlusions::with_capacity_in(slot.len(), arena);
         for light in 0..lights {
             for (i, surface) in surfaces.iter().enumerate() {
                 let Some(surface) = surface else { continue };
                 let time = queue.rays[i].time;
                 if let Some(shadow) = shader.shadow_ray(light, &queue.samples[i], surface, time) {
-                    slot[i * lights + light] = rays.len() as u32;
-                    rays.push(shadow);
+                    slot[i * lights + light] = rays.push(light as u32, shadow);
                 }
             }
         }
-        let mut blocked = ArenaVec::with_capacity_in(rays.len(), arena);
-        for chunk in rays.chunks(8) {
-            let (lanes, active) = lanes_of(chunk, |shadow| shadow.ray);
-            let t_max = std::array::from_fn(|k| chunk.get(k).map_or(0.0, |s| s.distance));
-            let packet = RayPacket::new(&lanes).with_t_max(t_max).with_active(active);
-            let answer = shader.tracer.occluded_packet(&packet);
-            blocked.extend((0..chunk.len()).map(|k| answer & (1 << k) != 0));
-        }
+        let blocked = rays.trace(shader.tracer, arena);
         ShadowQueue {
             lights,
             slot,
@@ -220,13 +210,17 @@ impl<'a> ShadowQueue<'a> {
     /// [`Shader::local`] asks.
     fn of(&self, i: usize, light: usize) -> Option<(ShadowRay, bool)> {
         let slot = self.slot[i * self.lights + light];
-        (slot != Self::NONE).then(|| (self.rays[slot as usize], self.blocked[slot as usize]))
+        let rays = self.rays.queries();
+        (slot != Self::NONE).then(|| (rays[slot as usize], self.blocked[slot as usize]))
     }
 }
 
-/// The rays of up to eight entries as a packet's lanes (the first repeated in the missing
-/// ones) and the mask of the lanes given.
-fn lanes_of<T>(chunk: &[T], ray: impl Fn(&T) -> Ray) -> ([Ray; 8], u8) {
-    let lanes = std::array::from_fn(|k| ray(chunk.get(k).unwrap_or(&chunk[0])));
-    (lanes, (1u16 << chunk.len()).wrapping_sub(1) as u8)
+impl Query for ShadowRay {
+    fn ray(&self) -> &Ray {
+        &self.ray
+    }
+
+    fn t_max(&self) -> f32 {
+        self.distance
+    }
 }
