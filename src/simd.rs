@@ -1,4 +1,5 @@
-//! Eight-lane SIMD types for the intersection kernels. This is the only module that
+//! Eight-lane SIMD types for the intersection kernels and the shading of eight hits at a
+//! time. This is the only module that
 //! imports `wide`: kernels see [`F32x8`], [`Mask8`] and [`Vec3x8`] and nothing else, so
 //! the backing crate (or a hand-written fallback) can change here alone.
 //!
@@ -53,6 +54,12 @@ impl F32x8 {
     #[inline]
     pub fn lane(&self, i: usize) -> f32 {
         self.0.as_array()[i]
+    }
+
+    /// Sets lane `i` in place (lanes written one by one cost no transposition after).
+    #[inline]
+    pub fn set_lane(&mut self, i: usize, value: f32) {
+        self.0.as_mut_array()[i] = value;
     }
 
     /// Lane-wise `if self < rhs { self } else { rhs }`: the x86 `minps` rule, and glam's
@@ -164,6 +171,22 @@ impl F32x8 {
         Mask8(self.0.is_nan())
     }
 
+    /// `self` raised to `exponent` lane by lane with `f32::powf` (the C library's
+    /// `powf`, whose exact bits no vector form here reproduces) in the lanes of `lanes`,
+    /// zero in the others.
+    #[inline]
+    pub fn powf(self, exponent: Self, lanes: Mask8) -> Self {
+        let (base, exponent) = (self.to_array(), exponent.to_array());
+        let mut power = [0.0; 8];
+        let mut bits = lanes.bitmask();
+        while bits != 0 {
+            let k = bits.trailing_zeros() as usize;
+            power[k] = base[k].powf(exponent[k]);
+            bits &= bits - 1;
+        }
+        F32x8::from_array(power)
+    }
+
     /// Neither NaN nor infinite, as `f32::is_finite`.
     #[inline]
     pub fn is_finite(self) -> Mask8 {
@@ -255,6 +278,16 @@ impl Mask8 {
     pub fn select(self, if_true: F32x8, if_false: F32x8) -> F32x8 {
         F32x8(self.0.select(if_true.0, if_false.0))
     }
+
+    /// [`Mask8::select`] on each component.
+    #[inline]
+    pub fn select_vec(self, if_true: Vec3x8, if_false: Vec3x8) -> Vec3x8 {
+        Vec3x8 {
+            x: self.select(if_true.x, if_false.x),
+            y: self.select(if_true.y, if_false.y),
+            z: self.select(if_true.z, if_false.z),
+        }
+    }
 }
 
 /// Every mask, by its bit mask.
@@ -299,6 +332,12 @@ impl Not for Mask8 {
 }
 
 impl Vec3x8 {
+    pub const ZERO: Vec3x8 = Vec3x8 {
+        x: F32x8::ZERO,
+        y: F32x8::ZERO,
+        z: F32x8::ZERO,
+    };
+
     /// The same vector in every lane.
     #[inline]
     pub fn splat(v: Vec3) -> Self {
@@ -324,6 +363,14 @@ impl Vec3x8 {
     #[inline]
     pub fn lane(&self, i: usize) -> Vec3 {
         Vec3::new(self.x.lane(i), self.y.lane(i), self.z.lane(i))
+    }
+
+    /// Sets lane `i` to `v` in place.
+    #[inline]
+    pub fn set_lane(&mut self, i: usize, v: Vec3) {
+        self.x.set_lane(i, v.x);
+        self.y.set_lane(i, v.y);
+        self.z.set_lane(i, v.z);
     }
 
     /// `x x' + y y' + z z'`, summed left to right as glam's `Vec3::dot`.
@@ -352,6 +399,18 @@ impl Vec3x8 {
         }
     }
 
+    /// `sqrt(v . v)`, as glam's `Vec3::length`.
+    #[inline]
+    pub fn length(self) -> F32x8 {
+        self.dot(self).sqrt()
+    }
+
+    /// `v * (1 / |v|)`, as glam's `Vec3::normalize`.
+    #[inline]
+    pub fn normalize(self) -> Self {
+        self.scale(F32x8::splat(1.0) / self.length())
+    }
+
     /// `1 / v` per component, as glam's `Vec3::recip`.
     #[inline]
     pub fn recip(self) -> Self {
@@ -360,6 +419,31 @@ impl Vec3x8 {
             x: one / self.x,
             y: one / self.y,
             z: one / self.z,
+        }
+    }
+}
+
+impl Add for Vec3x8 {
+    type Output = Vec3x8;
+    #[inline]
+    fn add(self, rhs: Self) -> Self {
+        Vec3x8 {
+            x: self.x + rhs.x,
+            y: self.y + rhs.y,
+            z: self.z + rhs.z,
+        }
+    }
+}
+
+/// Each component divided by the lane's scalar (glam's `Vec3 / f32`).
+impl Div<F32x8> for Vec3x8 {
+    type Output = Vec3x8;
+    #[inline]
+    fn div(self, rhs: F32x8) -> Self {
+        Vec3x8 {
+            x: self.x / rhs,
+            y: self.y / rhs,
+            z: self.z / rhs,
         }
     }
 }
