@@ -14,7 +14,7 @@
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
 use glam::Vec3;
-use wide::f32x8;
+use wide::{f32x8, u32x8};
 
 /// Eight `f32` lanes.
 #[derive(Clone, Copy, Debug)]
@@ -186,6 +186,27 @@ impl F32x8 {
         }
         F32x8::from_array(power)
     }
+
+    /// The next float above each lane, as `f32::next_up` (NaN and infinity stay): one
+    /// step of the lane's bits, away from zero for positive lanes, towards it for negative.
+    #[inline]
+    pub fn next_up(self) -> Self {
+        let bits = self.0.to_bits();
+        let magnitude = bits & u32x8::splat(0x7fff_ffff);
+        let one = u32x8::splat(1);
+        let positive = bits.simd_eq(magnitude);
+        let step = positive.select(bits + one, bits - one);
+        let next = magnitude.simd_eq(u32x8::ZERO).select(one, step);
+        let keep = self.is_nan() | self.eq(F32x8::splat(f32::INFINITY));
+        keep.select(self, F32x8(f32x8::from_bits(next)))
+    }
+
+    /// The next float below each lane, as `f32::next_down`: `-(-x).next_up()`, bit for bit.
+    #[inline]
+    pub fn next_down(self) -> Self {
+        -(-self).next_up()
+    }
+
 
     /// Neither NaN nor infinite, as `f32::is_finite`.
     #[inline]
@@ -399,6 +420,16 @@ impl Vec3x8 {
         }
     }
 
+    /// Each component's magnitude, as glam's `Vec3::abs`.
+    #[inline]
+    pub fn abs(self) -> Self {
+        Vec3x8 {
+            x: self.x.abs(),
+            y: self.y.abs(),
+            z: self.z.abs(),
+        }
+    }
+
     /// `sqrt(v . v)`, as glam's `Vec3::length`.
     #[inline]
     pub fn length(self) -> F32x8 {
@@ -559,6 +590,33 @@ mod tests {
         assert_eq!(bits(a.abs()), each(&|x, _| x.abs()));
         assert_eq!(bits(b.sqrt()), each(&|_, y| y.sqrt()));
         assert_eq!(bits(-a), each(&|x, _| -x));
+    }
+
+    #[test]
+    fn next_up_and_down_match_scalar() {
+        let specials = [
+            0.0,
+            -0.0,
+            f32::MIN_POSITIVE,
+            -f32::from_bits(1),
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            NAN,
+            -NAN,
+            1.0,
+            -1.0,
+            1.5e-40,
+            -3.25,
+        ];
+        for chunk in specials.chunks(8) {
+            let mut lanes = [0.5; 8];
+            lanes[..chunk.len()].copy_from_slice(chunk);
+            let v = F32x8::from_array(lanes);
+            assert_eq!(bits(v.next_up()), lanes.map(|x| x.next_up().to_bits()));
+            assert_eq!(bits(v.next_down()), lanes.map(|x| x.next_down().to_bits()));
+        }
     }
 
     #[test]

@@ -328,6 +328,14 @@ impl<'a> Shader<'a> {
     /// The hit point and the normal facing the ray: the point recomputed on the surface
     /// with its error bound, or with the `course` profile the point along the ray.
     pub(super) fn surface(&self, ray: &Ray, hit: &Hit) -> Surface {
+        let mut surface = self.hit_point(ray, hit);
+        surface.outward = surface.origin(surface.nf);
+        surface
+    }
+
+    /// [`Shader::surface`] but for `outward`, left at the point: the stream renderer
+    /// offsets eight points at a time ([`crate::intersect::spawn_origin8`]).
+    pub(super) fn hit_point(&self, ray: &Ray, hit: &Hit) -> Surface {
         let geometry = &self.tracer.geometry;
         let (p, normal, error) = match self.options.profile {
             Profile::Standard => {
@@ -346,15 +354,13 @@ impl<'a> Shader<'a> {
         };
         let inside = ray.dir.dot(normal) > 0.0;
         let nf = if inside { -normal } else { normal };
-        let mut surface = Surface {
+        Surface {
             p,
             nf,
             inside,
             error,
             outward: p,
-        };
-        surface.outward = surface.origin(nf);
-        surface
+        }
     }
 
     /// A reflected direction: the `mirror` direction, or with roughness g > 0 the

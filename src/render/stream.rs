@@ -3,10 +3,11 @@
 //! hits' shadow rays light by light, are traced as packets of eight by the stream
 //! scheduler ([`crate::accel::stream`], which `bench` measures), the hits are shaded,
 //! and the rays they spawn make the next depth's queue. A depth's hits are gathered eight
-//! to a [`HitBlock`] (structure of arrays, filled lane by lane in place), whose shadow
-//! rays are set up ([`crate::render::light::Emitter::sample8`]) and whose Blinn-Phong
-//! sums are taken ([`super::shade::Phong8`]) eight lanes at a time, light by light in
-//! the scalar order, bit for bit as the scalar path. Once the deepest queue is
+//! to a [`HitBlock`] (structure of arrays, filled lane by lane in place), whose points
+//! are offset off the surface ([`spawn_origin8`]), whose shadow rays are set up
+//! ([`crate::render::light::Emitter::sample8`]) and whose Blinn-Phong sums are taken
+//! ([`super::shade::Phong8`]) eight lanes at a time, light by light in the scalar
+//! order, bit for bit as the scalar path. Once the deepest queue is
 //! shaded, colours flow back up: each ray's colour, clamped if it hit something, is
 //! added to its parent's with its weight, in the order the scalar [`Shader::trace`] adds
 //! them, so the image is the scalar one byte for byte.
@@ -17,10 +18,11 @@ use glam::Vec3;
 
 use super::light::Receiver;
 use super::sampler::Sample;
-use super::shade::{Phong8, RayCounts, RayKind, Shader, Surface};
+use super::shade::{Phong8, RayCounts, RayKind, Shader, Surface, EPS};
 use crate::accel::stream::{self, Occlusions, Query};
+use crate::intersect::spawn_origin8;
 use crate::ray::Ray;
-use crate::simd::{Mask8, Vec3x8};
+use crate::simd::{F32x8, Mask8, Vec3x8};
 
 /// The rays of one depth, and what they bring back.
 pub(super) struct Queue<'a> {
@@ -140,7 +142,7 @@ fn shade_depth<'a>(
             Some(hit) => {
                 queue.colour.push(Vec3::ZERO);
                 queue.hit.push(true);
-                let surface = shader.surface(ray, hit);
+                let surface = shader.hit_point(ray, hit);
                 blocks.push(i as u32, &surface, ray.dir, geometry.material(hit.prim));
             }
             None => {
@@ -217,13 +219,22 @@ struct HitBlock {
     nf: Vec3x8,
     /// The bound of the point's error on each axis, in the lanes of `bounded`.
     error: Vec3x8,
-    /// Where shadow and reflected rays start.
+    /// Where shadow and reflected rays start ([`HitBlock::offset`]).
     origin: Vec3x8,
     /// The direction of the ray that hit.
     dir: Vec3x8,
 }
 
 impl HitBlock {
+    /// Sets `origin`, as `Surface::origin` along the facing normal: by the error bound
+    /// ([`spawn_origin8`]), or with the `course` profile by [`EPS`].
+    fn offset(&mut self) {
+        let bounded = Mask8::from_bitmask(self.bounded);
+        let by_error = spawn_origin8(self.point, self.error, self.nf);
+        let by_eps = self.point + self.nf.scale(F32x8::splat(EPS));
+        self.origin = bounded.select_vec(by_error, by_eps);
+    }
+
     /// Lane `k`'s hit as the scalar shader describes it.
     fn surface(&self, k: usize) -> Surface {
         Surface {
@@ -266,7 +277,8 @@ impl<'a> HitBlocks<'a> {
         }
     }
 
-    /// Adds the hit on `surface` of ray `ray`, of direction `dir`, on material `material`.
+    /// Adds the hit on `surface` (its `outward` not yet set) of ray `ray`, of direction
+    /// `dir`, on material `material`.
     fn push(&mut self, ray: u32, surface: &Surface, dir: Vec3, material: u32) {
         if self.filled == 8 {
             self.blocks.push(Self::EMPTY);
@@ -284,12 +296,14 @@ impl<'a> HitBlocks<'a> {
         block.material[k] = material;
         block.point.set_lane(k, surface.p);
         block.nf.set_lane(k, surface.nf);
-        block.origin.set_lane(k, surface.outward);
         block.dir.set_lane(k, dir);
         self.filled += 1;
+        if self.filled == 8 {
+            block.offset();
+        }
     }
 
-    /// The blocks, the last one's free lanes repeating its lane 0.
+    /// The blocks, the last one's free lanes repeating its lane 0 and offset.
     fn finish(mut self) -> ArenaVec<'a, HitBlock> {
         let n = self.filled;
         if let Some(block) = self.blocks.last_mut() {
@@ -300,11 +314,13 @@ impl<'a> HitBlocks<'a> {
                     &mut block.point,
                     &mut block.nf,
                     &mut block.error,
-                    &mut block.origin,
                     &mut block.dir,
                 ] {
                     v.set_lane(k, v.lane(0));
                 }
+            }
+            if n < 8 {
+                block.offset();
             }
         }
         self.blocks

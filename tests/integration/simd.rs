@@ -674,6 +674,28 @@ proptest! {
         }
     }
 
+    /// `spawn_origin8` against `spawn_origin`, with sides that are unit normals, axes (zero
+    /// components), NaN and infinite, and error bounds of zero.
+    #[test]
+    fn spawn_origin8_equals_scalar(
+        points in prop::array::uniform8(point()),
+        errors in prop::array::uniform8(prop_oneof![
+            3 => (0.0f32..1e-3, 0.0f32..1e-3, 0.0f32..1e-3).prop_map(|(x, y, z)| Vec3::new(x, y, z)),
+            1 => Just(Vec3::ZERO),
+        ]),
+        sides in prop::array::uniform8(direction()),
+    ) {
+        let got = intersect::spawn_origin8(
+            Vec3x8::from_lanes(points),
+            Vec3x8::from_lanes(errors),
+            Vec3x8::from_lanes(sides),
+        );
+        for k in 0..8 {
+            let scalar = intersect::spawn_origin(points[k], errors[k], sides[k]);
+            prop_assert_eq!(bits3(got.lane(k)), bits3(scalar), "lane {}", k);
+        }
+    }
+
     /// `Phong8::light` against `Phong::light` in the lanes it is asked for, with each
     /// lane's own material or all lanes on one.
     #[test]
