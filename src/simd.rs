@@ -1,7 +1,7 @@
 //! Eight-lane SIMD types for the intersection kernels and the shading of eight hits at a
-//! time. This is the only module that
-//! imports `wide`: kernels see [`F32x8`], [`Mask8`] and [`Vec3x8`] and nothing else, so
-//! the backing crate (or a hand-written fallback) can change here alone.
+//! time. This is the only module that imports `wide`: kernels see [`F32x8`], [`Mask8`]
+//! and [`Vec3x8`] and nothing else, so the backing crate (or a hand-written fallback)
+//! can change here alone.
 //!
 //! Every operation is IEEE-exact lane by lane (`+ - * /` and `sqrt` are correctly
 //! rounded, as their scalar counterparts are) and nothing here fuses a multiply with an
@@ -206,7 +206,6 @@ impl F32x8 {
     pub fn next_down(self) -> Self {
         -(-self).next_up()
     }
-
 
     /// Neither NaN nor infinite, as `f32::is_finite`.
     #[inline]

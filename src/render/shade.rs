@@ -8,11 +8,12 @@
 //! stream renderer (`stream.rs`) compute the same colours: Blinn-Phong over the lights
 //! given each one's shadow ray and answer ([`Phong::light`], which the stream renderer
 //! computes for eight hits at a time with its twin [`Phong8::light`]), and `spawn`, which
-//! hands on the reflected ray and then the transmitted one with their weights. Spawned rays start from the hit recomputed on the surface, offset by its
-//! error bound ([`crate::intersect::SurfacePoint`]); the `course` profile offsets by
-//! [`EPS`] instead. Fuzzy reflection tilts every mirror direction, glass's Fresnel
-//! reflection and total internal reflection included; a roughness of 0 draws no random
-//! number, so its image is the mirror one byte for byte.
+//! hands on the reflected ray and then the transmitted one with their weights. Spawned
+//! rays start from the hit recomputed on the surface, offset by its error bound
+//! ([`crate::intersect::SurfacePoint`]); the `course` profile offsets by [`EPS`] instead.
+//! Fuzzy reflection tilts every mirror direction, glass's Fresnel reflection and total
+//! internal reflection included; a roughness of 0 draws no random number, so its image
+//! is the mirror one byte for byte.
 
 use glam::Vec3;
 
