@@ -165,6 +165,7 @@ fn shade_depth<'a>(
             }
             let l = shadows.dir[entry];
             let added = phong.light(block.nf, block.dir, l, shadows.colour[light], lit);
+            // The scalar sum skips an unlit light: its lanes keep their bits.
             colour = lit.select_vec(colour + added, colour);
         }
         for k in lanes(block.lanes) {
