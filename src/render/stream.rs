@@ -229,11 +229,17 @@ struct HitBlock {
 impl HitBlock {
     /// Sets `origin`, as `Surface::origin` along the facing normal: by the error bound
     /// ([`spawn_origin8`]), or with the `course` profile by [`EPS`].
+    ///
+    /// A profile offsets every hit one way, so only a block's padding lanes mix the two:
+    /// the way no lane takes is not computed.
     fn offset(&mut self) {
-        let bounded = Mask8::from_bitmask(self.bounded);
-        let by_error = spawn_origin8(self.point, self.error, self.nf);
-        let by_eps = self.point + self.nf.scale(F32x8::splat(EPS));
-        self.origin = bounded.select_vec(by_error, by_eps);
+        let by_eps = || self.point + self.nf.scale(F32x8::splat(EPS));
+        self.origin = match self.bounded {
+            0 => by_eps(),
+            0xFF => spawn_origin8(self.point, self.error, self.nf),
+            bounded => Mask8::from_bitmask(bounded)
+                .select_vec(spawn_origin8(self.point, self.error, self.nf), by_eps()),
+        };
     }
 
     /// Lane `k`'s hit as the scalar shader describes it.
