@@ -4,9 +4,10 @@
 
 use std::time::{Duration, Instant};
 
-use glam::Vec3;
+use bumpalo::Bump;
 use rayon::prelude::*;
 
+use crate::accel::stream::{self, Occlusions, Query};
 use crate::accel::Tracer;
 use crate::plural::count;
 use crate::prim::PrimKind;
@@ -23,8 +24,6 @@ pub const OFFSET: f64 = 1e-4;
 const CHUNK: usize = 128;
 /// An idle lane of a block.
 const IDLE: u32 = u32::MAX;
-/// The end points that [`Path::Stream`] groups a stream's occlusion rays by, at most.
-const ENDS: usize = 8;
 
 /// One of the protocol's ray sets.
 #[derive(Clone, Debug)]
@@ -35,6 +34,9 @@ pub struct RaySet {
     pub t_max: Vec<f32>,
     /// Occlusion queries rather than closest hits.
     pub occlusion: bool,
+    /// For occlusion queries, the index of the light each ray heads for, which the
+    /// renderer knows as it makes its shadow rays: [`Path::Stream`] groups by it.
+    pub light: Vec<u32>,
     /// The rays in groups of eight, as indices into `rays` (`IDLE` past the end): 4 x 2
     /// pixel tiles for primary rays, as the Embree harness groups them, and eight
     /// consecutive rays otherwise. Both paths walk the same blocks.
@@ -48,10 +50,11 @@ pub enum Path {
     Single,
     /// A block of eight rays as one packet.
     Packet,
-    /// The blocks that a thread takes at a time (`CHUNK` of them) as one stream, whose
-    /// occlusion rays are regrouped by their end point before they are traced as packets
-    /// of eight (as Embree's stream API sorts an incoherent stream by direction), the
-    /// regrouping timed with the tracing.
+    /// The blocks that a thread takes at a time (`CHUNK` of them) as one stream of the
+    /// scheduler the renderer traces its queues with ([`crate::accel::stream`]), which
+    /// regroups occlusion rays by their light before it traces them as packets of eight
+    /// (as Embree's stream API sorts an incoherent stream by direction), the regrouping
+    /// timed with the tracing.
     Stream,
 }
 
@@ -122,6 +125,7 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
         rays: Vec::with_capacity((width * height) as usize),
         t_max: vec![f32::INFINITY; (width * height) as usize],
         occlusion: false,
+        light: Vec::new(),
         blocks: tile_blocks(width, height),
     };
     // The pinhole camera of P3F.md section 3 in double precision (aperture and focal
@@ -156,6 +160,7 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
         rays: Vec::new(),
         t_max: Vec::new(),
         occlusion: true,
+        light: Vec::new(),
         blocks: Vec::new(),
     };
     let mut reflection = RaySet {
@@ -163,6 +168,7 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
         rays: Vec::new(),
         t_max: Vec::new(),
         occlusion: false,
+        light: Vec::new(),
         blocks: Vec::new(),
     };
     let g = tracer.geometry;
@@ -206,6 +212,7 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
                     .rays
                     .push(Ray::new(origin.as_vec3(), light.dir.as_vec3()));
                 shadow.t_max.push(light.distance);
+                shadow.light.push(index as u32);
             }
         }
         let mirror = d - facing * (2.0 * d.dot(facing));
@@ -319,14 +326,22 @@ fn trace_pass(
 ) {
     answers.fill([f32::NAN; 8]);
     pool.install(|| {
-        answers
+        let chunks = answers
             .par_chunks_mut(CHUNK)
-            .zip(set.blocks.par_chunks(CHUNK))
-            .for_each(|(answers, blocks)| match path {
-                Path::Single => each_block(blocks, answers, |b| trace_single(tracer, set, b)),
-                Path::Packet => each_block(blocks, answers, |b| trace_packet(tracer, set, b)),
-                Path::Stream => trace_stream(tracer, set, blocks, answers),
-            });
+            .zip(set.blocks.par_chunks(CHUNK));
+        match path {
+            Path::Single => chunks.for_each(|(answers, blocks)| {
+                each_block(blocks, answers, |b| trace_single(tracer, set, b))
+            }),
+            Path::Packet => chunks.for_each(|(answers, blocks)| {
+                each_block(blocks, answers, |b| trace_packet(tracer, set, b))
+            }),
+            // Scratch space for a stream, as each of the renderer's workers has.
+            Path::Stream => chunks.for_each_init(Bump::new, |arena, (answers, blocks)| {
+                arena.reset();
+                trace_stream(tracer, set, blocks, answers, arena)
+            }),
+        }
     });
 }
 
@@ -378,79 +393,57 @@ fn trace_packet(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> [f32; 8] {
     }
 }
 
-/// The answers of up to [`CHUNK`] `blocks` as one stream. Occlusion rays are grouped by
-/// the point they end at (ends within 1e-4 of their coordinates' magnitude count as one,
-/// up to [`ENDS`] such points, the other rays after them), in block order within each
-/// group, and traced as packets of eight: shadow rays towards one light then share
-/// packets, as the renderer packs them, where the set has each hit's rays to every light
-/// side by side. Closest-hit rays are traced block by block as [`Path::Packet`] does:
-/// regrouping them by direction cost more than it saved (BENCHMARKS.md).
-fn trace_stream(tracer: &Tracer, set: &RaySet, blocks: &[[u32; 8]], answers: &mut [[f32; 8]]) {
-    let packets = |blocks: &[[u32; 8]], answers: &mut [[f32; 8]]| {
-        each_block(blocks, answers, |b| trace_packet(tracer, set, b))
-    };
-    if !set.occlusion {
-        return packets(blocks, answers);
+/// A ray of a set and its `t_max`, as a stream takes it, and the place of its answer.
+#[derive(Clone, Copy)]
+struct SetQuery<'s> {
+    ray: &'s Ray,
+    t_max: f32,
+    place: usize,
+}
+
+impl Query for SetQuery<'_> {
+    fn ray(&self) -> &Ray {
+        self.ray
     }
-    // Each place (8 block + lane) of the stream: its ray's group, the end point it
-    // shares, or OTHER, or IDLE_LANES for the blocks' idle lanes.
-    const OTHER: usize = ENDS;
-    const IDLE_LANES: usize = ENDS + 1;
-    let places = blocks.as_flattened();
-    let mut group = [0u8; 8 * CHUNK];
-    let mut ends = [Vec3::ZERO; ENDS];
-    let mut tolerance = [0f32; ENDS];
-    let mut count = [0u16; ENDS + 2];
-    let mut found = 0;
-    for (place, &i) in places.iter().enumerate() {
-        let g = if i == IDLE {
-            IDLE_LANES
-        } else {
-            let end = set.rays[i as usize].at(set.t_max[i as usize]);
-            let near = |g: &usize| (end - ends[*g]).abs().max_element() <= tolerance[*g];
-            match (0..found).find(near) {
-                Some(g) => g,
-                None if found < ENDS && end.is_finite() => {
-                    ends[found] = end;
-                    tolerance[found] = 1e-4 * end.abs().max_element().max(1.0);
-                    found += 1;
-                    found - 1
-                }
-                None => OTHER,
-            }
-        };
-        group[place] = g as u8;
-        count[g] += 1;
+
+    fn t_max(&self) -> f32 {
+        self.t_max
     }
-    if found <= 1 {
-        // One end point at most: the blocks are grouped already.
-        return packets(blocks, answers);
-    }
-    // The stream's rays in group order, and the place of each; each group's first
-    // place in that order, then its next free one.
-    let mut next = [0u16; ENDS + 2];
-    for g in 1..next.len() {
-        next[g] = next[g - 1] + count[g - 1];
-    }
-    let mut rays = [IDLE; 8 * CHUNK];
-    let mut to = [0u16; 8 * CHUNK];
-    for (place, (&g, &i)) in group.iter().zip(places).enumerate() {
-        let slot = &mut next[g as usize];
-        (rays[*slot as usize], to[*slot as usize]) = (i, place as u16);
-        *slot += 1;
-    }
-    // Packets of the rays that are not idle; the last one's missing lanes are idle.
-    let traced = places.len() - count[IDLE_LANES] as usize;
+}
+
+/// The answers of up to [`CHUNK`] `blocks` as one stream of [`crate::accel::stream`],
+/// its scratch space in `arena`: closest-hit rays in block order, occlusion rays grouped
+/// by their light, as the renderer traces its queues. Idle lanes are left out.
+fn trace_stream(
+    tracer: &Tracer,
+    set: &RaySet,
+    blocks: &[[u32; 8]],
+    answers: &mut [[f32; 8]],
+    arena: &Bump,
+) {
     let answers = answers.as_flattened_mut();
-    for start in (0..traced).step_by(8) {
-        let lanes = start..start + 8;
-        let block = rays[lanes.clone()].try_into().expect("eight lanes");
-        let answer = trace_packet(tracer, set, block);
-        for ((&i, &place), a) in rays[lanes.clone()].iter().zip(&to[lanes]).zip(answer) {
-            if i != IDLE {
-                answers[place as usize] = a;
-            }
+    // The rays of the stream, by their index in the set.
+    let rays = blocks.as_flattened().iter().enumerate();
+    let rays = rays.filter(|(_, &i)| i != IDLE).map(|(place, &i)| {
+        let i = i as usize;
+        let (ray, t_max) = (&set.rays[i], set.t_max[i]);
+        (i, SetQuery { ray, t_max, place })
+    });
+    if set.occlusion {
+        let mut stream = Occlusions::with_capacity_in(8 * blocks.len(), arena);
+        for (i, query) in rays {
+            stream.push(set.light[i], query);
         }
+        let blocked = stream.trace(tracer, arena);
+        for (query, blocked) in stream.queries().iter().zip(blocked) {
+            answers[query.place] = if blocked { 0.0 } else { -1.0 };
+        }
+    } else {
+        stream::closest(tracer, rays.map(|(_, query)| query), |queries, hits| {
+            for (query, hit) in queries.iter().zip(hits) {
+                answers[query.place] = hit.map_or(-1.0, |h| h.t);
+            }
+        });
     }
 }
 
@@ -621,8 +614,8 @@ mod tests {
         assert_eq!(tile_blocks(8, 2)[1], [4, 5, 6, 7, 12, 13, 14, 15]);
     }
 
-    /// Ten lights, more end points than a stream groups by, and spheres that shadow one
-    /// another: every path gives every ray of every set the same answer.
+    /// Ten lights, whose shadow rays a stream regroups light by light, and spheres that
+    /// shadow one another: every path gives every ray of every set the same answer.
     #[test]
     fn streams_answer_as_single_rays_and_packets() {
         let mut text = String::from(

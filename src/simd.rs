@@ -1,6 +1,7 @@
-//! Eight-lane SIMD types for the intersection kernels. This is the only module that
-//! imports `wide`: kernels see [`F32x8`], [`Mask8`] and [`Vec3x8`] and nothing else, so
-//! the backing crate (or a hand-written fallback) can change here alone.
+//! Eight-lane SIMD types for the intersection kernels and the shading of eight hits at a
+//! time. This is the only module that imports `wide`: kernels see [`F32x8`], [`Mask8`]
+//! and [`Vec3x8`] and nothing else, so the backing crate (or a hand-written fallback)
+//! can change here alone.
 //!
 //! Every operation is IEEE-exact lane by lane (`+ - * /` and `sqrt` are correctly
 //! rounded, as their scalar counterparts are) and nothing here fuses a multiply with an
@@ -13,7 +14,7 @@
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
 use glam::Vec3;
-use wide::f32x8;
+use wide::{f32x8, u32x8};
 
 /// Eight `f32` lanes.
 #[derive(Clone, Copy, Debug)]
@@ -53,6 +54,12 @@ impl F32x8 {
     #[inline]
     pub fn lane(&self, i: usize) -> f32 {
         self.0.as_array()[i]
+    }
+
+    /// Sets lane `i` in place (lanes written one by one cost no transposition after).
+    #[inline]
+    pub fn set_lane(&mut self, i: usize, value: f32) {
+        self.0.as_mut_array()[i] = value;
     }
 
     /// Lane-wise `if self < rhs { self } else { rhs }`: the x86 `minps` rule, and glam's
@@ -164,6 +171,42 @@ impl F32x8 {
         Mask8(self.0.is_nan())
     }
 
+    /// `self` raised to `exponent` lane by lane with `f32::powf` (the C library's
+    /// `powf`, whose exact bits no vector form here reproduces) in the lanes of `lanes`,
+    /// zero in the others.
+    #[inline]
+    pub fn powf(self, exponent: Self, lanes: Mask8) -> Self {
+        let (base, exponent) = (self.to_array(), exponent.to_array());
+        let mut power = [0.0; 8];
+        let mut bits = lanes.bitmask();
+        while bits != 0 {
+            let k = bits.trailing_zeros() as usize;
+            power[k] = base[k].powf(exponent[k]);
+            bits &= bits - 1;
+        }
+        F32x8::from_array(power)
+    }
+
+    /// The next float above each lane, as `f32::next_up` (NaN and infinity stay): one
+    /// step of the lane's bits, away from zero for positive lanes, towards it for negative.
+    #[inline]
+    pub fn next_up(self) -> Self {
+        let bits = self.0.to_bits();
+        let magnitude = bits & u32x8::splat(0x7fff_ffff);
+        let one = u32x8::splat(1);
+        let positive = bits.simd_eq(magnitude);
+        let step = positive.select(bits + one, bits - one);
+        let next = magnitude.simd_eq(u32x8::ZERO).select(one, step);
+        let keep = self.is_nan() | self.eq(F32x8::splat(f32::INFINITY));
+        keep.select(self, F32x8(f32x8::from_bits(next)))
+    }
+
+    /// The next float below each lane, as `f32::next_down`: `-(-x).next_up()`, bit for bit.
+    #[inline]
+    pub fn next_down(self) -> Self {
+        -(-self).next_up()
+    }
+
     /// Neither NaN nor infinite, as `f32::is_finite`.
     #[inline]
     pub fn is_finite(self) -> Mask8 {
@@ -255,6 +298,16 @@ impl Mask8 {
     pub fn select(self, if_true: F32x8, if_false: F32x8) -> F32x8 {
         F32x8(self.0.select(if_true.0, if_false.0))
     }
+
+    /// [`Mask8::select`] on each component.
+    #[inline]
+    pub fn select_vec(self, if_true: Vec3x8, if_false: Vec3x8) -> Vec3x8 {
+        Vec3x8 {
+            x: self.select(if_true.x, if_false.x),
+            y: self.select(if_true.y, if_false.y),
+            z: self.select(if_true.z, if_false.z),
+        }
+    }
 }
 
 /// Every mask, by its bit mask.
@@ -299,6 +352,12 @@ impl Not for Mask8 {
 }
 
 impl Vec3x8 {
+    pub const ZERO: Vec3x8 = Vec3x8 {
+        x: F32x8::ZERO,
+        y: F32x8::ZERO,
+        z: F32x8::ZERO,
+    };
+
     /// The same vector in every lane.
     #[inline]
     pub fn splat(v: Vec3) -> Self {
@@ -324,6 +383,14 @@ impl Vec3x8 {
     #[inline]
     pub fn lane(&self, i: usize) -> Vec3 {
         Vec3::new(self.x.lane(i), self.y.lane(i), self.z.lane(i))
+    }
+
+    /// Sets lane `i` to `v` in place.
+    #[inline]
+    pub fn set_lane(&mut self, i: usize, v: Vec3) {
+        self.x.set_lane(i, v.x);
+        self.y.set_lane(i, v.y);
+        self.z.set_lane(i, v.z);
     }
 
     /// `x x' + y y' + z z'`, summed left to right as glam's `Vec3::dot`.
@@ -372,7 +439,7 @@ impl Vec3x8 {
         }
     }
 
-    /// `abs` per component, as glam's `Vec3::abs`.
+    /// Each component's magnitude, as glam's `Vec3::abs`.
     #[inline]
     pub fn abs(self) -> Self {
         Vec3x8 {
@@ -382,10 +449,16 @@ impl Vec3x8 {
         }
     }
 
-    /// The lanes whose three components are finite, as glam's `Vec3::is_finite`.
+    /// `sqrt(v . v)`, as glam's `Vec3::length`.
     #[inline]
-    pub fn is_finite(self) -> Mask8 {
-        self.x.is_finite() & self.y.is_finite() & self.z.is_finite()
+    pub fn length(self) -> F32x8 {
+        self.dot(self).sqrt()
+    }
+
+    /// `v * (1 / |v|)`, as glam's `Vec3::normalize`.
+    #[inline]
+    pub fn normalize(self) -> Self {
+        self.scale(F32x8::splat(1.0) / self.length())
     }
 
     /// `1 / v` per component, as glam's `Vec3::recip`.
@@ -408,6 +481,19 @@ impl Add for Vec3x8 {
             x: self.x + rhs.x,
             y: self.y + rhs.y,
             z: self.z + rhs.z,
+        }
+    }
+}
+
+/// Each component divided by the lane's scalar (glam's `Vec3 / f32`).
+impl Div<F32x8> for Vec3x8 {
+    type Output = Vec3x8;
+    #[inline]
+    fn div(self, rhs: F32x8) -> Self {
+        Vec3x8 {
+            x: self.x / rhs,
+            y: self.y / rhs,
+            z: self.z / rhs,
         }
     }
 }
@@ -523,6 +609,33 @@ mod tests {
         assert_eq!(bits(a.abs()), each(&|x, _| x.abs()));
         assert_eq!(bits(b.sqrt()), each(&|_, y| y.sqrt()));
         assert_eq!(bits(-a), each(&|x, _| -x));
+    }
+
+    #[test]
+    fn next_up_and_down_match_scalar() {
+        let specials = [
+            0.0,
+            -0.0,
+            f32::MIN_POSITIVE,
+            -f32::from_bits(1),
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            NAN,
+            -NAN,
+            1.0,
+            -1.0,
+            1.5e-40,
+            -3.25,
+        ];
+        for chunk in specials.chunks(8) {
+            let mut lanes = [0.5; 8];
+            lanes[..chunk.len()].copy_from_slice(chunk);
+            let v = F32x8::from_array(lanes);
+            assert_eq!(bits(v.next_up()), lanes.map(|x| x.next_up().to_bits()));
+            assert_eq!(bits(v.next_down()), lanes.map(|x| x.next_down().to_bits()));
+        }
     }
 
     #[test]

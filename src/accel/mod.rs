@@ -24,6 +24,7 @@ pub mod grid;
 mod hit;
 mod none;
 mod stack;
+pub mod stream;
 mod structure;
 
 use std::time::{Duration, Instant};

@@ -48,7 +48,7 @@ pub use triangle::{
 use glam::Vec3;
 
 use crate::ray::{Ray, RayPacket};
-use crate::simd::{F32x8, Mask8};
+use crate::simd::{F32x8, Mask8, Vec3x8};
 
 /// The storage of one primitive kind, and what the layers above ask of a primitive `i`
 /// of it. Implemented in the kind's own file; [`crate::scene::Geometry`] dispatches to it.
@@ -282,6 +282,20 @@ pub fn spawn_origin(point: Vec3, error: Vec3, side: Vec3) -> Vec3 {
         }
     };
     Vec3::new(away(0), away(1), away(2))
+}
+
+/// [`spawn_origin`] for eight points at once, lane by lane in the same operations.
+pub fn spawn_origin8(point: Vec3x8, error: Vec3x8, side: Vec3x8) -> Vec3x8 {
+    let moved = point + side.scale(error.dot(side.abs()));
+    let away = |m: F32x8, s: F32x8| {
+        let below = s.lt(F32x8::ZERO).select(m.next_down(), m);
+        s.gt(F32x8::ZERO).select(m.next_up(), below)
+    };
+    Vec3x8 {
+        x: away(moved.x, side.x),
+        y: away(moved.y, side.y),
+        z: away(moved.z, side.z),
+    }
 }
 
 /// The first of two roots `near <= far` that lies in `(t_min, t_max)`: the entry of a

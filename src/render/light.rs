@@ -18,6 +18,7 @@ use glam::{DVec3, Vec3};
 
 use super::sampler::{dim, Sample, SampleGrid};
 use crate::scene::Light;
+use crate::simd::{F32x8, Mask8, Vec3x8};
 
 /// Lights sampled over an area become this grid of points when a pixel has one sample
 /// (P3F.md 6.3), unless the options say otherwise.
@@ -90,6 +91,14 @@ pub struct Incident<V> {
     pub colour: Vec3,
 }
 
+/// Where one point of a light lies from each of eight receivers, as [`Incident`] lane by
+/// lane; its colour is the light's ([`Emitter::colour`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Incident8 {
+    pub dir: Vec3x8,
+    pub distance: F32x8,
+}
+
 /// The vectors lights are sampled in: `Vec3`, the renderer's, and `DVec3`, in which the
 /// bench makes the protocol's rays as the Embree harness does. Each rounds as its caller's
 /// rays always have: images and checksums are made of those bits.
@@ -147,6 +156,43 @@ impl Emitter {
             distance,
             colour: light.colour,
         })
+    }
+
+    /// [`Emitter::sample`] for eight receivers at once, lane `k` with the sample
+    /// `sample(k)`, in the same operations: the lanes whose point is above the receiver's
+    /// tangent plane, and their light (the other lanes' is meaningless).
+    #[inline(always)]
+    pub fn sample8(
+        &self,
+        index: usize,
+        receiver: &Receiver<Vec3x8>,
+        sample: impl Fn(usize) -> Sample,
+    ) -> (Mask8, Incident8) {
+        let position = match self {
+            Emitter::Point(light) => Vec3x8::splat(light.position),
+            Emitter::Rectangle(_) => Vec3x8::from_lanes(std::array::from_fn(|k| {
+                self.point(index, &sample(k)).position
+            })),
+        };
+        let facing = !receiver
+            .normal
+            .dot(position - receiver.point)
+            .le(F32x8::ZERO);
+        let towards = position - receiver.origin;
+        let distance = towards.length();
+        let incident = Incident8 {
+            dir: towards / distance,
+            distance,
+        };
+        (facing, incident)
+    }
+
+    /// The colour that every point of this light sends.
+    pub fn colour(&self) -> Vec3 {
+        match self {
+            Emitter::Point(light) => light.colour,
+            Emitter::Rectangle(rectangle) => rectangle.colour,
+        }
     }
 
     /// The point of this light (the `index`-th of the shader's) that `sample` sees.

@@ -4,15 +4,16 @@
 //! [`Profile`] is section 11's model of the course's own renderer instead. What light
 //! each light sends a hit, from where, is for [`super::light`] to say.
 //!
-//! A hit is shaded in two steps that the scalar recursion ([`Shader::trace`]) and the
-//! stream renderer (`stream.rs`) share, so both compute the same colours:
-//! `local`, Blinn-Phong over the lights given each one's shadow ray and answer, and
-//! `spawn`, which hands on the reflected ray and then the transmitted one with their
-//! weights. Spawned rays start from the hit recomputed on the surface, offset by its
-//! error bound ([`crate::intersect::SurfacePoint`]); the `course` profile offsets by
-//! [`EPS`] instead. Fuzzy reflection tilts every mirror direction, glass's Fresnel
-//! reflection and total internal reflection included; a roughness of 0 draws no random
-//! number, so its image is the mirror one byte for byte.
+//! A hit is shaded in two steps, so that the scalar recursion ([`Shader::trace`]) and the
+//! stream renderer (`stream.rs`) compute the same colours: Blinn-Phong over the lights
+//! given each one's shadow ray and answer ([`Phong::light`], which the stream renderer
+//! computes for eight hits at a time with its twin [`Phong8::light`]), and `spawn`, which
+//! hands on the reflected ray and then the transmitted one with their weights. Spawned
+//! rays start from the hit recomputed on the surface, offset by its error bound
+//! ([`crate::intersect::SurfacePoint`]); the `course` profile offsets by [`EPS`] instead.
+//! Fuzzy reflection tilts every mirror direction, glass's Fresnel reflection and total
+//! internal reflection included; a roughness of 0 draws no random number, so its image
+//! is the mirror one byte for byte.
 
 use glam::Vec3;
 
@@ -23,6 +24,7 @@ use crate::accel::Tracer;
 use crate::intersect::{spawn_origin, SphereRoots, SurfacePoint};
 use crate::ray::{Hit, Ray};
 use crate::scene::{Frame, Material, Scene};
+use crate::simd::{F32x8, Mask8, Vec3x8};
 
 /// The `course` profile's offset of secondary ray origins along the normal against
 /// self-intersection, in scene units (the course scenes span a few units). The standard
@@ -173,8 +175,8 @@ pub struct Shader<'a> {
     pub tracer: &'a Tracer<'a>,
     pub skybox: Option<&'a Skybox>,
     pub lights: Vec<Emitter>,
-    /// `1 / (1.25 * number of lights in the file)`, the weight of the specular highlight.
-    pub katt: f32,
+    /// Each material's Blinn-Phong terms, by material index.
+    pub phong: Vec<Phong>,
     pub options: ShadeOptions,
 }
 
@@ -188,7 +190,8 @@ impl<'a> Shader<'a> {
         options: ShadeOptions,
         jittered: bool,
     ) -> Self {
-        let light_count = scene.lights.len().max(1) as f32;
+        // Katt, the weight of the specular highlight: 1 / (1.25 * the file's lights).
+        let katt = 1.0 / (1.25 * scene.lights.len().max(1) as f32);
         Shader {
             scene,
             tracer,
@@ -200,7 +203,11 @@ impl<'a> Shader<'a> {
                 options.light_grid,
                 jittered,
             ),
-            katt: 1.0 / (1.25 * light_count),
+            phong: scene
+                .materials
+                .iter()
+                .map(|m| Phong::new(m, katt))
+                .collect(),
             options,
         }
     }
@@ -230,8 +237,10 @@ impl<'a> Shader<'a> {
                 self.tracer.occluded(&shadow.ray, 0.0, shadow.distance),
             ))
         };
-        let material = self.material(&hit);
-        let mut colour = self.local(ray, surface.nf, material, rays, shadow_of);
+        let material_index = self.tracer.geometry.material(hit.prim) as usize;
+        let material = &self.scene.materials[material_index];
+        let phong = &self.phong[material_index];
+        let mut colour = self.local(ray, surface.nf, phong, rays, shadow_of);
         if depth >= self.options.max_depth {
             return colour.clamp(Vec3::ZERO, Vec3::ONE);
         }
@@ -247,11 +256,6 @@ impl<'a> Shader<'a> {
             colour += child.weight * seen;
         });
         colour.clamp(Vec3::ZERO, Vec3::ONE)
-    }
-
-    /// The material of the primitive `hit` met.
-    pub(super) fn material(&self, hit: &Hit) -> &Material {
-        &self.scene.materials[self.tracer.geometry.material(hit.prim) as usize]
     }
 
     /// Gives `emit` the rays a hit on `surface` spawns, arrived along `ray` in a medium of
@@ -325,6 +329,14 @@ impl<'a> Shader<'a> {
     /// The hit point and the normal facing the ray: the point recomputed on the surface
     /// with its error bound, or with the `course` profile the point along the ray.
     pub(super) fn surface(&self, ray: &Ray, hit: &Hit) -> Surface {
+        let mut surface = self.hit_point(ray, hit);
+        surface.outward = surface.origin(surface.nf);
+        surface
+    }
+
+    /// [`Shader::surface`] but for `outward`, left at the point: the stream renderer
+    /// offsets eight points at a time ([`crate::intersect::spawn_origin8`]).
+    pub(super) fn hit_point(&self, ray: &Ray, hit: &Hit) -> Surface {
         let geometry = &self.tracer.geometry;
         let (p, normal, error) = match self.options.profile {
             Profile::Standard => {
@@ -343,15 +355,13 @@ impl<'a> Shader<'a> {
         };
         let inside = ray.dir.dot(normal) > 0.0;
         let nf = if inside { -normal } else { normal };
-        let mut surface = Surface {
+        Surface {
             p,
             nf,
             inside,
             error,
             outward: p,
-        };
-        surface.outward = surface.origin(nf);
-        surface
+        }
     }
 
     /// A reflected direction: the `mirror` direction, or with roughness g > 0 the
@@ -372,13 +382,13 @@ impl<'a> Shader<'a> {
 
     /// Blinn-Phong over the lights that face the surface (normal `nf` facing the ray) and
     /// are not shadowed: `shadow_of` gives each light's shadow ray ([`Shader::shadow_ray`])
-    /// and whether it is blocked, traced on the spot by [`Shader::trace`] or beforehand as
-    /// packets by the stream renderer.
-    pub(super) fn local(
+    /// and whether it is blocked, traced on the spot. The stream renderer computes the
+    /// same sum eight hits at a time ([`Phong8`]).
+    fn local(
         &self,
         ray: &Ray,
         nf: Vec3,
-        m: &Material,
+        phong: &Phong,
         rays: &mut RayCounts,
         shadow_of: &mut impl FnMut(usize) -> Option<(ShadowRay, bool)>,
     ) -> Vec3 {
@@ -391,11 +401,7 @@ impl<'a> Shader<'a> {
             if blocked {
                 continue;
             }
-            let l = shadow.ray.dir;
-            let diffuse = m.diffuse * m.kd * nf.dot(l).max(0.0);
-            let h = (l - ray.dir).normalize();
-            let specular = self.katt * m.specular * m.ks * nf.dot(h).max(0.0).powf(m.shine);
-            colour += shadow.colour * (diffuse + specular);
+            colour += phong.light(nf, ray.dir, shadow.ray.dir, shadow.colour);
         }
         colour
     }
@@ -405,7 +411,7 @@ impl<'a> Shader<'a> {
     // Inlined into both paths: out of line, the scalar render ran 0.7% more instructions
     // than with the ray built inside the lights' loop (callgrind, balls_low).
     #[inline(always)]
-    pub(super) fn shadow_ray(
+    fn shadow_ray(
         &self,
         index: usize,
         sample: &Sample,
@@ -442,17 +448,17 @@ impl<'a> Shader<'a> {
 /// Where a ray met a surface.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Surface {
-    p: Vec3,
+    pub p: Vec3,
     /// The unit normal turned to face the ray.
     pub nf: Vec3,
     /// The ray arrived from inside the surface.
-    inside: bool,
+    pub inside: bool,
     /// The bound of `p`'s error on each axis; `None` with the `course` profile, whose rays
     /// start [`EPS`] off the surface.
-    error: Option<Vec3>,
+    pub error: Option<Vec3>,
     /// `origin(nf)`, where reflected and shadow rays start: one hit's shadow rays to
     /// every light and its reflected ray share it.
-    outward: Vec3,
+    pub outward: Vec3,
 }
 
 impl Surface {
@@ -480,11 +486,92 @@ pub(super) struct Spawned {
 /// A shadow ray from a hit point to a point of a light, and the light that arrives along
 /// it when nothing is in the way.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct ShadowRay {
+struct ShadowRay {
     pub ray: Ray,
     /// The light's distance along `ray`.
     pub distance: f32,
     pub colour: Vec3,
+}
+
+/// A material's Blinn-Phong terms (P3F.md 4.2), the products of its constants taken
+/// once, in the order the formula multiplies them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Phong {
+    /// `Cd Kd`.
+    pub diffuse: Vec3,
+    /// `Katt Cs Ks`.
+    pub specular: Vec3,
+    pub shine: f32,
+}
+
+impl Phong {
+    pub fn new(m: &Material, katt: f32) -> Self {
+        Phong {
+            diffuse: m.diffuse * m.kd,
+            specular: katt * m.specular * m.ks,
+            shine: m.shine,
+        }
+    }
+
+    /// The light of `colour` arriving from the unit direction `l` that a surface of unit
+    /// normal `nf` reflects back along a ray of direction `dir`.
+    #[inline(always)]
+    pub fn light(&self, nf: Vec3, dir: Vec3, l: Vec3, colour: Vec3) -> Vec3 {
+        let diffuse = self.diffuse * positive(nf.dot(l));
+        let h = (l - dir).normalize();
+        let specular = self.specular * positive(nf.dot(h)).powf(self.shine);
+        colour * (diffuse + specular)
+    }
+}
+
+/// `x` where it is above zero, else zero (NaN included): `x.max(0.0)` as it compiles on
+/// x86, written out so that [`Phong8`] can take the same rule.
+#[inline(always)]
+fn positive(x: f32) -> f32 {
+    if x > 0.0 {
+        x
+    } else {
+        0.0
+    }
+}
+
+/// Eight hits' [`Phong`] terms, lane `k` from the `k`-th material.
+#[derive(Clone, Copy, Debug)]
+pub struct Phong8 {
+    diffuse: Vec3x8,
+    specular: Vec3x8,
+    shine: F32x8,
+}
+
+impl Phong8 {
+    /// The terms of `lanes`, splat when every lane has the same (most blocks of a mesh).
+    #[inline]
+    pub fn new(lanes: [&Phong; 8]) -> Self {
+        if lanes.iter().all(|&p| std::ptr::eq(p, lanes[0])) {
+            let p = lanes[0];
+            return Phong8 {
+                diffuse: Vec3x8::splat(p.diffuse),
+                specular: Vec3x8::splat(p.specular),
+                shine: F32x8::splat(p.shine),
+            };
+        }
+        Phong8 {
+            diffuse: Vec3x8::from_lanes(lanes.map(|p| p.diffuse)),
+            specular: Vec3x8::from_lanes(lanes.map(|p| p.specular)),
+            shine: F32x8::from_array(lanes.map(|p| p.shine)),
+        }
+    }
+
+    /// [`Phong::light`] lane by lane, bit for bit in the lanes of `lit`, the only ones
+    /// whose power is taken (the others' value is meaningless).
+    #[inline(always)]
+    pub fn light(&self, nf: Vec3x8, dir: Vec3x8, l: Vec3x8, colour: Vec3, lit: Mask8) -> Vec3x8 {
+        let diffuse = self.diffuse.scale(nf.dot(l).max(F32x8::ZERO));
+        let h = (l - dir).normalize();
+        let power = nf.dot(h).max(F32x8::ZERO).powf(self.shine, lit);
+        let specular = self.specular.scale(power);
+        Vec3x8::splat(colour) * (diffuse + specular)
+    }
 }
 
 /// Reflectance from the exact Fresnel equations: the mean of the two polarisations.

@@ -1,18 +1,28 @@
 //! The stream renderer: a tile's samples traced breadth first, one depth at a time. Each
-//! depth is a [`Queue`] (structure of arrays in the tile's arena): its rays are traced as
-//! packets of eight, their hits' shadow rays are gathered per light and traced as packets,
-//! the hits are shaded, and the rays they spawn make the next depth's queue. Once the
-//! deepest queue is shaded, colours flow back up: each ray's colour, clamped if it hit
-//! something, is added to its parent's with its weight, in the order the scalar
-//! [`Shader::trace`] adds them, so the image is the scalar one byte for byte.
+//! depth is a [`Queue`] (structure of arrays in the tile's arena): its rays, then their
+//! hits' shadow rays light by light, are traced as packets of eight by the stream
+//! scheduler ([`crate::accel::stream`], which `bench` measures), the hits are shaded,
+//! and the rays they spawn make the next depth's queue. A depth's hits are gathered eight
+//! to a [`HitBlock`] (structure of arrays, filled lane by lane in place), whose points
+//! are offset off the surface ([`spawn_origin8`]), whose shadow rays are set up
+//! ([`crate::render::light::Emitter::sample8`]) and whose Blinn-Phong sums are taken
+//! ([`super::shade::Phong8`]) eight lanes at a time, light by light in the scalar
+//! order, bit for bit as the scalar path. Once the deepest queue is
+//! shaded, colours flow back up: each ray's colour, clamped if it hit something, is
+//! added to its parent's with its weight, in the order the scalar [`Shader::trace`] adds
+//! them, so the image is the scalar one byte for byte.
 
 use bumpalo::collections::Vec as ArenaVec;
 use bumpalo::Bump;
 use glam::Vec3;
 
+use super::light::Receiver;
 use super::sampler::Sample;
-use super::shade::{RayCounts, RayKind, Shader, ShadowRay, Surface};
-use crate::ray::{Ray, RayPacket};
+use super::shade::{Phong8, RayCounts, RayKind, Shader, Surface, EPS};
+use crate::accel::stream::{self, Occlusions, Query};
+use crate::intersect::spawn_origin8;
+use crate::ray::Ray;
+use crate::simd::{F32x8, Mask8, Vec3x8};
 
 /// The rays of one depth, and what they bring back.
 pub(super) struct Queue<'a> {
@@ -122,111 +132,294 @@ fn shade_depth<'a>(
 ) -> Queue<'a> {
     let n = queue.len();
     let mut hits = ArenaVec::with_capacity_in(n, arena);
-    for chunk in queue.rays.chunks(8) {
-        let (lanes, active) = lanes_of(chunk, |ray| *ray);
-        let found = shader
-            .tracer
-            .closest_packet(&RayPacket::new(&lanes).with_active(active));
-        hits.extend_from_slice(&found[..chunk.len()]);
+    stream::closest(shader.tracer, &queue.rays, |_, found| {
+        hits.extend_from_slice(found)
+    });
+    let geometry = &shader.tracer.geometry;
+    let mut blocks = HitBlocks::with_capacity_in(n, arena);
+    for (i, (hit, ray)) in hits.iter().zip(&queue.rays).enumerate() {
+        match hit {
+            Some(hit) => {
+                queue.colour.push(Vec3::ZERO);
+                queue.hit.push(true);
+                let surface = shader.hit_point(ray, hit);
+                blocks.push(i as u32, &surface, ray.dir, geometry.material(hit.prim));
+            }
+            None => {
+                queue.colour.push(shader.background(ray.dir, depth));
+                queue.hit.push(false);
+            }
+        }
     }
-    let surfaces = ArenaVec::from_iter_in(
-        hits.iter()
-            .zip(&queue.rays)
-            .map(|(hit, ray)| hit.map(|hit| shader.surface(ray, &hit))),
-        arena,
-    );
-    let shadows = ShadowQueue::trace(shader, arena, queue, &surfaces);
+    let blocks = blocks.finish();
+    let shadows = ShadowQueue::trace(shader, arena, queue, &blocks);
+    rays.shadow += shadows.traced;
+    for (b, block) in blocks.iter().enumerate() {
+        let phong = Phong8::new(block.material.map(|m| &shader.phong[m as usize]));
+        let mut colour = Vec3x8::ZERO;
+        for light in 0..shadows.lights {
+            let entry = light * blocks.len() + b;
+            let lit = Mask8::from_bitmask(shadows.lit[entry]);
+            if lit.none() {
+                continue;
+            }
+            let l = shadows.dir[entry];
+            let added = phong.light(block.nf, block.dir, l, shadows.colour[light], lit);
+            // The scalar sum skips an unlit light: its lanes keep their bits.
+            colour = lit.select_vec(colour + added, colour);
+        }
+        for k in lanes(block.lanes) {
+            queue.colour[block.ray[k] as usize] = colour.lane(k);
+        }
+    }
 
     // A hit spawns a reflected and a transmitted ray at most.
     let mut next = Queue::with_capacity_in(2 * n, arena);
-    for (i, (hit, surface)) in hits.iter().zip(&surfaces).enumerate() {
-        let ray = &queue.rays[i];
-        let (Some(hit), Some(surface)) = (hit, surface) else {
-            queue.colour.push(shader.background(ray.dir, depth));
-            queue.hit.push(false);
-            continue;
-        };
-        let material = shader.material(hit);
-        let shadow_of = &mut |light| shadows.of(i, light);
-        queue
-            .colour
-            .push(shader.local(ray, surface.nf, material, rays, shadow_of));
-        queue.hit.push(true);
-        if depth < shader.options.max_depth {
-            let sample = &queue.samples[i];
-            shader.spawn(ray, sample, surface, material, queue.ior[i], |child| {
-                rays.add(child.kind, 1);
-                next.push(child.ray, child.sample, child.ior, i as u32, child.weight);
-            });
+    if depth < shader.options.max_depth {
+        for block in &blocks {
+            for k in lanes(block.lanes) {
+                let i = block.ray[k] as usize;
+                let material = &shader.scene.materials[block.material[k] as usize];
+                let surface = block.surface(k);
+                let (ray, sample) = (&queue.rays[i], &queue.samples[i]);
+                shader.spawn(ray, sample, &surface, material, queue.ior[i], |child| {
+                    rays.add(child.kind, 1);
+                    next.push(child.ray, child.sample, child.ior, i as u32, child.weight);
+                });
+            }
         }
     }
     next
 }
 
-/// The shadow rays of one depth's hits, light by light, and whether each is blocked.
+/// The indices of the set bits of `bits`, lowest first.
+fn lanes(mut bits: u8) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            k
+        })
+    })
+}
+
+/// Eight hits of a depth as structure of arrays, for the shading of eight at a time.
+#[derive(Clone, Copy, Debug)]
+struct HitBlock {
+    /// The lanes that hold a hit; the others repeat lane 0 and are inert.
+    lanes: u8,
+    /// The lanes whose ray arrived from inside the surface.
+    inside: u8,
+    /// The lanes with an error bound (all but with the `course` profile).
+    bounded: u8,
+    /// Each lane's index in the depth's queue.
+    ray: [u32; 8],
+    material: [u32; 8],
+    point: Vec3x8,
+    /// The normal facing the ray.
+    nf: Vec3x8,
+    /// The bound of the point's error on each axis, in the lanes of `bounded`.
+    error: Vec3x8,
+    /// Where shadow and reflected rays start ([`HitBlock::offset`]).
+    origin: Vec3x8,
+    /// The direction of the ray that hit.
+    dir: Vec3x8,
+}
+
+impl HitBlock {
+    /// Sets `origin`, as `Surface::origin` along the facing normal: by the error bound
+    /// ([`spawn_origin8`]), or with the `course` profile by [`EPS`].
+    ///
+    /// A profile offsets every hit one way, so only a block's padding lanes mix the two:
+    /// the way no lane takes is not computed.
+    fn offset(&mut self) {
+        let by_eps = || self.point + self.nf.scale(F32x8::splat(EPS));
+        self.origin = match self.bounded {
+            0 => by_eps(),
+            0xFF => spawn_origin8(self.point, self.error, self.nf),
+            bounded => Mask8::from_bitmask(bounded)
+                .select_vec(spawn_origin8(self.point, self.error, self.nf), by_eps()),
+        };
+    }
+
+    /// Lane `k`'s hit as the scalar shader describes it.
+    fn surface(&self, k: usize) -> Surface {
+        Surface {
+            p: self.point.lane(k),
+            nf: self.nf.lane(k),
+            inside: self.inside >> k & 1 == 1,
+            error: (self.bounded >> k & 1 == 1).then(|| self.error.lane(k)),
+            outward: self.origin.lane(k),
+        }
+    }
+}
+
+/// A depth's hits gathered into [`HitBlock`]s, in queue order.
+struct HitBlocks<'a> {
+    /// The blocks, the last one being filled in place (a block copied in costs a
+    /// `memcpy` of its 700-odd bytes).
+    blocks: ArenaVec<'a, HitBlock>,
+    /// The lanes of the last block filled.
+    filled: usize,
+}
+
+impl<'a> HitBlocks<'a> {
+    const EMPTY: HitBlock = HitBlock {
+        lanes: 0,
+        inside: 0,
+        bounded: 0,
+        error: Vec3x8::ZERO,
+        ray: [0; 8],
+        material: [0; 8],
+        point: Vec3x8::ZERO,
+        nf: Vec3x8::ZERO,
+        origin: Vec3x8::ZERO,
+        dir: Vec3x8::ZERO,
+    };
+
+    fn with_capacity_in(hits: usize, arena: &'a Bump) -> Self {
+        HitBlocks {
+            blocks: ArenaVec::with_capacity_in(hits.div_ceil(8), arena),
+            filled: 8,
+        }
+    }
+
+    /// Adds the hit on `surface` (its `outward` not yet set) of ray `ray`, of direction
+    /// `dir`, on material `material`.
+    fn push(&mut self, ray: u32, surface: &Surface, dir: Vec3, material: u32) {
+        if self.filled == 8 {
+            self.blocks.push(Self::EMPTY);
+            self.filled = 0;
+        }
+        let k = self.filled;
+        let block = self.blocks.last_mut().expect("a block is open");
+        block.lanes |= 1 << k;
+        block.inside |= u8::from(surface.inside) << k;
+        if let Some(error) = surface.error {
+            block.bounded |= 1 << k;
+            block.error.set_lane(k, error);
+        }
+        block.ray[k] = ray;
+        block.material[k] = material;
+        block.point.set_lane(k, surface.p);
+        block.nf.set_lane(k, surface.nf);
+        block.dir.set_lane(k, dir);
+        self.filled += 1;
+        if self.filled == 8 {
+            block.offset();
+        }
+    }
+
+    /// The blocks, the last one's free lanes repeating its lane 0 and offset.
+    fn finish(mut self) -> ArenaVec<'a, HitBlock> {
+        let n = self.filled;
+        if let Some(block) = self.blocks.last_mut() {
+            for k in n..8 {
+                block.ray[k] = block.ray[0];
+                block.material[k] = block.material[0];
+                for v in [
+                    &mut block.point,
+                    &mut block.nf,
+                    &mut block.error,
+                    &mut block.dir,
+                ] {
+                    v.set_lane(k, v.lane(0));
+                }
+            }
+            if n < 8 {
+                block.offset();
+            }
+        }
+        self.blocks
+    }
+}
+
+/// The shadow rays of one depth's hit blocks, and the lanes each light reaches.
 struct ShadowQueue<'a> {
     lights: usize,
-    /// Entry `i * lights + light`: the index in `rays` of hit `i`'s shadow ray to
-    /// `light`, or [`ShadowQueue::NONE`] when it has none.
-    slot: ArenaVec<'a, u32>,
-    rays: ArenaVec<'a, ShadowRay>,
-    blocked: ArenaVec<'a, bool>,
+    /// Entry `light * blocks + block`: the unit directions from the block's hits towards
+    /// the light's point.
+    dir: ArenaVec<'a, Vec3x8>,
+    /// Entry `light * blocks + block`: the lanes that face the light and whose shadow
+    /// ray is not blocked.
+    lit: ArenaVec<'a, u8>,
+    /// Each light's colour.
+    colour: ArenaVec<'a, Vec3>,
+    /// The shadow rays traced.
+    traced: u64,
 }
 
 impl<'a> ShadowQueue<'a> {
-    const NONE: u32 = u32::MAX;
-
-    /// Builds every hit's shadow ray to every light, grouped by light so that a packet's
-    /// rays head for one point, and traces them as packets.
-    fn trace(
-        shader: &Shader,
-        arena: &'a Bump,
-        queue: &Queue,
-        surfaces: &[Option<Surface>],
-    ) -> Self {
+    /// Sets up every hit's shadow ray to every light, eight hits at a time, and traces
+    /// them as a stream, light by light.
+    fn trace(shader: &Shader, arena: &'a Bump, queue: &Queue, blocks: &[HitBlock]) -> Self {
         let lights = shader.lights.len();
-        let mut slot = ArenaVec::from_iter_in(
-            std::iter::repeat_n(Self::NONE, surfaces.len() * lights),
-            arena,
-        );
-        let mut rays = ArenaVec::with_capacity_in(slot.len(), arena);
-        for light in 0..lights {
-            for (i, surface) in surfaces.iter().enumerate() {
-                let Some(surface) = surface else { continue };
-                let time = queue.rays[i].time;
-                if let Some(shadow) = shader.shadow_ray(light, &queue.samples[i], surface, time) {
-                    slot[i * lights + light] = rays.len() as u32;
-                    rays.push(shadow);
+        let mut dir = ArenaVec::with_capacity_in(lights * blocks.len(), arena);
+        let mut lit = ArenaVec::with_capacity_in(lights * blocks.len(), arena);
+        let mut colour = ArenaVec::with_capacity_in(lights, arena);
+        let mut rays = Occlusions::with_capacity_in(8 * lights * blocks.len(), arena);
+        for (index, emitter) in shader.lights.iter().enumerate() {
+            colour.push(emitter.colour());
+            for block in blocks {
+                let receiver = Receiver {
+                    point: block.point,
+                    normal: block.nf,
+                    origin: block.origin,
+                };
+                let sample = |k: usize| queue.samples[block.ray[k] as usize];
+                let (facing, incident) = emitter.sample8(index, &receiver, sample);
+                let facing = facing.bitmask() & block.lanes;
+                for k in lanes(facing) {
+                    let ray = Ray {
+                        origin: block.origin.lane(k),
+                        dir: incident.dir.lane(k),
+                        time: queue.rays[block.ray[k] as usize].time,
+                    };
+                    rays.push(
+                        index as u32,
+                        ShadowQuery {
+                            ray,
+                            distance: incident.distance.lane(k),
+                        },
+                    );
+                }
+                dir.push(incident.dir);
+                lit.push(facing);
+            }
+        }
+        let blocked = rays.trace(shader.tracer, arena);
+        // The answers come in the order the rays were pushed: light, block, lane.
+        let mut answers = blocked.iter();
+        for lanes_lit in lit.iter_mut() {
+            for k in lanes(*lanes_lit) {
+                if answers.next() == Some(&true) {
+                    *lanes_lit &= !(1 << k);
                 }
             }
         }
-        let mut blocked = ArenaVec::with_capacity_in(rays.len(), arena);
-        for chunk in rays.chunks(8) {
-            let (lanes, active) = lanes_of(chunk, |shadow| shadow.ray);
-            let t_max = std::array::from_fn(|k| chunk.get(k).map_or(0.0, |s| s.distance));
-            let packet = RayPacket::new(&lanes).with_t_max(t_max).with_active(active);
-            let answer = shader.tracer.occluded_packet(&packet);
-            blocked.extend((0..chunk.len()).map(|k| answer & (1 << k) != 0));
-        }
         ShadowQueue {
             lights,
-            slot,
-            rays,
-            blocked,
+            dir,
+            lit,
+            colour,
+            traced: blocked.len() as u64,
         }
-    }
-
-    /// Hit `i`'s shadow ray to `light` and whether it is blocked, as
-    /// [`Shader::local`] asks.
-    fn of(&self, i: usize, light: usize) -> Option<(ShadowRay, bool)> {
-        let slot = self.slot[i * self.lights + light];
-        (slot != Self::NONE).then(|| (self.rays[slot as usize], self.blocked[slot as usize]))
     }
 }
 
-/// The rays of up to eight entries as a packet's lanes (the first repeated in the missing
-/// ones) and the mask of the lanes given.
-fn lanes_of<T>(chunk: &[T], ray: impl Fn(&T) -> Ray) -> ([Ray; 8], u8) {
-    let lanes = std::array::from_fn(|k| ray(chunk.get(k).unwrap_or(&chunk[0])));
-    (lanes, (1u16 << chunk.len()).wrapping_sub(1) as u8)
+/// A shadow ray: towards a light's point, which is `distance` away along it.
+#[derive(Clone, Copy, Debug)]
+struct ShadowQuery {
+    ray: Ray,
+    distance: f32,
+}
+
+impl Query for ShadowQuery {
+    fn ray(&self) -> &Ray {
+        &self.ray
+    }
+
+    fn t_max(&self) -> f32 {
+        self.distance
+    }
 }

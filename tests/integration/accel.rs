@@ -3,7 +3,9 @@
 
 use crate::common;
 
+use bumpalo::Bump;
 use glam::Vec3;
+use p3trace::accel::stream::{self, Occlusions, Query};
 use p3trace::accel::{AccelKind, AccelOptions, Tracer};
 use p3trace::accel::{BvhBuild, BvhWidth};
 use p3trace::intersect::{self, IntersectOptions, SphereRoots};
@@ -303,6 +305,89 @@ proptest! {
                         "{} occluded, {:?} t_max {}", name, ray, t_max
                     );
                 }
+            }
+        }
+    }
+}
+
+/// A query of a stream: a ray and its `t_max`.
+#[derive(Clone, Copy)]
+struct Bounded(Ray, f32);
+
+impl Query for Bounded {
+    fn ray(&self) -> &Ray {
+        &self.0
+    }
+
+    fn t_max(&self) -> f32 {
+        self.1
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(100))]
+
+    /// Streams change how rays travel, never what they find: the scheduler that the
+    /// renderer's queues and the protocol's stream path trace through gives each query
+    /// brute force's answer for its ray alone, whatever the stream's length (a last
+    /// packet of fewer than eight), the order of its lights (grouped already, or
+    /// regrouped by the scheduler) and its rays (zero, NaN and infinite directions).
+    #[test]
+    fn streams_answer_as_single_rays(
+        scene in scene(),
+        queries in prop::collection::vec(
+            (
+                ray(),
+                prop_oneof![
+                    8 => Just(None),
+                    1 => prop::sample::select(vec![
+                        Vec3::ZERO,
+                        Vec3::new(f32::NAN, 0.0, 1.0),
+                        Vec3::new(f32::INFINITY, 0.0, 0.0),
+                    ]).prop_map(Some),
+                ],
+                0u32..12,
+            ),
+            0..40,
+        ),
+        grouped in prop::bool::ANY,
+    ) {
+        let mut queries: Vec<(Bounded, u32)> = queries
+            .into_iter()
+            .map(|((mut ray, t_max), odd, light)| {
+                ray.dir = odd.unwrap_or(ray.dir);
+                (Bounded(ray, t_max), light)
+            })
+            .collect();
+        if grouped {
+            queries.sort_by_key(|&(_, light)| light);
+        }
+        let g = &scene.geometry;
+        let brute = Tracer::new(g, &AccelOptions::brute_force());
+        let arena = Bump::new();
+        for options in structures() {
+            let tracer = Tracer::new(g, &options);
+            let name = tracer.name();
+            let mut hits = Vec::new();
+            stream::closest(&tracer, queries.iter().map(|&(q, _)| q), |_, found| {
+                hits.extend_from_slice(found)
+            });
+            let mut occlusions = Occlusions::with_capacity_in(queries.len(), &arena);
+            for &(query, light) in &queries {
+                occlusions.push(light, query);
+            }
+            let blocked = occlusions.trace(&tracer, &arena);
+            prop_assert_eq!(hits.len(), queries.len());
+            prop_assert_eq!(blocked.len(), queries.len());
+            for (k, &(Bounded(ray, t_max), light)) in queries.iter().enumerate() {
+                prop_assert_eq!(
+                    hits[k], brute.closest(&ray, 0.0, t_max),
+                    "{} query {} closest, {:?} t_max {}", name, k, ray, t_max
+                );
+                prop_assert_eq!(
+                    blocked[k], brute.occluded(&ray, 0.0, t_max),
+                    "{} query {} to light {} occluded, {:?} t_max {}", name, k, light, ray, t_max
+                );
             }
         }
     }

@@ -1,5 +1,6 @@
 //! Every SIMD kernel against its scalar twin, lane for lane and bit for bit: the same hit
-//! or miss and the same `t` (and `u`, `v`) bits, on random primitives and rays that
+//! or miss and the same `t` (and `u`, `v`) bits, and the shading's light samples and
+//! Blinn-Phong terms, on random primitives and rays that
 //! include NaN, infinite and zero directions, origins inside primitives and in slab
 //! planes, degenerate triangles, zero radii and random active masks. Inactive lanes and
 //! padding slots must miss.
@@ -11,7 +12,10 @@ use p3trace::intersect::{
     Triangles,
 };
 use p3trace::ray::{Ray, RayPacket};
-use p3trace::simd::{F32x8, Mask8};
+use p3trace::render::light::{Emitter, LightSample, Receiver, Rectangle};
+use p3trace::render::sampler::{Sample, SampleGrid, SampleRng};
+use p3trace::render::shade::{Phong, Phong8};
+use p3trace::simd::{F32x8, Mask8, Vec3x8};
 use proptest::prelude::*;
 
 const NAN: f32 = f32::NAN;
@@ -645,4 +649,144 @@ fn padding_is_inert_for_the_primitive_test_only() {
     assert!(box_ray.intervals8(&pack, 0.0, INF).hit.all());
     let (hit, _) = intersect::aabb_leaf(&ray, ray.dir.recip(), &pack, 0.0, INF);
     assert!(hit.none());
+}
+
+/// The bits of a number, every NaN as one: comparisons tell `-0.0` from `0.0`, not one
+/// NaN from another, whose sign and payload hang on the order in which the compiler puts
+/// a commutative operation's operands (a NaN direction is untraceable, a NaN colour
+/// clamps the same, whatever its bits).
+fn bits(x: f32) -> u32 {
+    if x.is_nan() {
+        f32::NAN.to_bits()
+    } else {
+        x.to_bits()
+    }
+}
+
+/// [`bits`] of each component.
+fn bits3(v: Vec3) -> [u32; 3] {
+    v.to_array().map(bits)
+}
+
+fn sample_of(seed: u64) -> Sample {
+    Sample {
+        rng: SampleRng::new(seed as u32, 3, seed),
+        cell: [(seed % 3) as u32, (seed % 2) as u32],
+        grid: SampleGrid {
+            columns: 3,
+            rows: 2,
+        },
+    }
+}
+
+/// A point light, or a rectangle sampled at each lane's own point.
+fn emitter() -> impl Strategy<Value = Emitter> {
+    let colour = (0.0f32..2.0, 0.0f32..2.0, 0.0f32..2.0).prop_map(|(r, g, b)| Vec3::new(r, g, b));
+    prop_oneof![
+        (point(), colour.clone())
+            .prop_map(|(position, colour)| { Emitter::Point(LightSample { position, colour }) }),
+        (point(), direction(), direction(), colour).prop_map(|(centre, across, up, colour)| {
+            Emitter::Rectangle(Rectangle {
+                centre,
+                across,
+                up,
+                colour,
+            })
+        }),
+    ]
+}
+
+/// Blinn-Phong terms, with exponents that are integers, fractions, zero and large.
+fn phong() -> impl Strategy<Value = Phong> {
+    let colour = (0.0f32..1.0, 0.0f32..1.0, 0.0f32..1.0).prop_map(|(r, g, b)| Vec3::new(r, g, b));
+    let shine = prop_oneof![
+        3 => 0.0f32..200.0,
+        1 => prop::sample::select(vec![0.0, 1.0, 20.0, 100.0, 1e4]),
+    ];
+    (colour.clone(), colour, shine).prop_map(|(diffuse, specular, shine)| Phong {
+        diffuse,
+        specular,
+        shine,
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(CASES))]
+
+    /// `Emitter::sample8` against `Emitter::sample` on each lane's receiver.
+    #[test]
+    fn light_sample8_equals_scalar(
+        emitter in emitter(),
+        index in 0usize..3,
+        points in prop::array::uniform8(point()),
+        normals in prop::array::uniform8(direction()),
+        origins in prop::array::uniform8(point()),
+        seed in any::<u64>(),
+    ) {
+        let samples: [Sample; 8] = std::array::from_fn(|k| sample_of(seed.wrapping_add(k as u64)));
+        let receiver8 = Receiver {
+            point: Vec3x8::from_lanes(points),
+            normal: Vec3x8::from_lanes(normals),
+            origin: Vec3x8::from_lanes(origins),
+        };
+        let (facing, incident) = emitter.sample8(index, &receiver8, |k| samples[k]);
+        for k in 0..8 {
+            let receiver = Receiver { point: points[k], normal: normals[k], origin: origins[k] };
+            let scalar = emitter.sample(index, &receiver, &samples[k]);
+            prop_assert_eq!(facing.bitmask() >> k & 1 == 1, scalar.is_some(), "lane {}", k);
+            if let Some(scalar) = scalar {
+                prop_assert_eq!(bits3(incident.dir.lane(k)), bits3(scalar.dir), "lane {}", k);
+                prop_assert_eq!(bits(incident.distance.lane(k)), bits(scalar.distance));
+                prop_assert_eq!(emitter.colour(), scalar.colour);
+            }
+        }
+    }
+
+    /// `spawn_origin8` against `spawn_origin`, with sides that are unit normals, axes (zero
+    /// components), NaN and infinite, and error bounds of zero.
+    #[test]
+    fn spawn_origin8_equals_scalar(
+        points in prop::array::uniform8(point()),
+        errors in prop::array::uniform8(prop_oneof![
+            3 => (0.0f32..1e-3, 0.0f32..1e-3, 0.0f32..1e-3).prop_map(|(x, y, z)| Vec3::new(x, y, z)),
+            1 => Just(Vec3::ZERO),
+        ]),
+        sides in prop::array::uniform8(direction()),
+    ) {
+        let got = intersect::spawn_origin8(
+            Vec3x8::from_lanes(points),
+            Vec3x8::from_lanes(errors),
+            Vec3x8::from_lanes(sides),
+        );
+        for k in 0..8 {
+            let scalar = intersect::spawn_origin(points[k], errors[k], sides[k]);
+            prop_assert_eq!(bits3(got.lane(k)), bits3(scalar), "lane {}", k);
+        }
+    }
+
+    /// `Phong8::light` against `Phong::light` in the lanes it is asked for, with each
+    /// lane's own material or all lanes on one.
+    #[test]
+    fn phong8_equals_scalar(
+        materials in prop::array::uniform8(phong()),
+        shared in any::<bool>(),
+        normals in prop::array::uniform8(direction()),
+        dirs in prop::array::uniform8(direction()),
+        lights in prop::array::uniform8(direction()),
+        colour in point(),
+        lit in any::<u8>(),
+    ) {
+        let lanes: [&Phong; 8] = std::array::from_fn(|k| &materials[if shared { 0 } else { k }]);
+        let phong8 = Phong8::new(lanes);
+        let (nf, dir, l) = (
+            Vec3x8::from_lanes(normals),
+            Vec3x8::from_lanes(dirs),
+            Vec3x8::from_lanes(lights),
+        );
+        let got = phong8.light(nf, dir, l, colour, Mask8::from_bitmask(lit));
+        for k in (0..8).filter(|k| lit >> k & 1 == 1) {
+            let scalar = lanes[k].light(normals[k], dirs[k], lights[k], colour);
+            prop_assert_eq!(bits3(got.lane(k)), bits3(scalar), "lane {}", k);
+        }
+    }
 }

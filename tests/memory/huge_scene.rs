@@ -21,35 +21,14 @@ const MAX_BYTES_PER_SPHERE: f64 = 140.0;
 pub fn ten_million_spheres_render_within_the_stated_memory() {
     let before = counting::start();
 
-    let mut scene = Scene {
-        name: "10M spheres".into(),
-        background: Vec3::new(0.2, 0.4, 0.6),
-        has_camera: true,
-        ..Scene::default()
-    };
-    scene.materials.push(Material::DEFAULT);
-    // Pushed one by one as the reader does, so the arrays grow as they would.
-    let spheres = &mut scene.geometry.spheres;
-    for x in 0..SIDES[0] {
-        for y in 0..SIDES[1] {
-            for z in 0..SIDES[2] {
-                spheres.centre.push(Vec3::new(x as f32, y as f32, z as f32));
-                spheres.radius.push(0.25);
-                spheres.material.push(0);
-            }
-        }
-    }
-    assert_eq!(spheres.radius.len(), SPHERES);
+    let scene = sphere_lattice(
+        "10M spheres",
+        SIDES,
+        Vec3::new(124.6, 99.6, 400.0),
+        [64, 48],
+    );
+    assert_eq!(scene.geometry.spheres.radius.len(), SPHERES);
 
-    scene.camera = CameraSpec {
-        from: Vec3::new(124.6, 99.6, 400.0),
-        at: Vec3::new(124.6, 99.6, 0.0),
-        up: Vec3::Y,
-        angle: 50.0,
-        width: 64,
-        height: 48,
-        ..CameraSpec::default()
-    };
     let report = counting::render_within(&scene, before, SPHERES, "sphere", MAX_BYTES_PER_SPHERE);
 
     // The lattice fills the middle of the image; rays between its rows leave it.
@@ -75,4 +54,37 @@ pub fn ten_million_spheres_render_within_the_stated_memory() {
     let bvh = Tracer::new(g, &AccelOptions::default());
     assert!(brute.is_some());
     assert_eq!(bvh.closest(&ray, 0.0, f32::INFINITY), brute);
+}
+
+/// A lattice of `sides` spheres of radius 0.25, one unit apart from the origin, pushed one
+/// by one as the reader does (so the arrays grow as they would), seen from `from` straight
+/// down the z axis at `[width, height]`.
+pub fn sphere_lattice(name: &str, sides: [u32; 3], from: Vec3, [width, height]: [u32; 2]) -> Scene {
+    let mut scene = Scene {
+        name: name.into(),
+        background: Vec3::new(0.2, 0.4, 0.6),
+        has_camera: true,
+        ..Scene::default()
+    };
+    scene.materials.push(Material::DEFAULT);
+    let spheres = &mut scene.geometry.spheres;
+    for x in 0..sides[0] {
+        for y in 0..sides[1] {
+            for z in 0..sides[2] {
+                spheres.centre.push(Vec3::new(x as f32, y as f32, z as f32));
+                spheres.radius.push(0.25);
+                spheres.material.push(0);
+            }
+        }
+    }
+    scene.camera = CameraSpec {
+        from,
+        at: Vec3::new(from.x, from.y, 0.0),
+        up: Vec3::Y,
+        angle: 50.0,
+        width,
+        height,
+        ..CameraSpec::default()
+    };
+    scene
 }

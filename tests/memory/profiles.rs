@@ -2,41 +2,22 @@
 //! test goes with each query, and nothing copies the geometry to carry it.
 
 use crate::counting;
+use crate::huge_scene::sphere_lattice;
 use glam::Vec3;
 use p3trace::render::shade::Profile;
 use p3trace::render::{render, RenderOptions};
-use p3trace::scene::{CameraSpec, Material, Scene};
 
 /// A lattice of 100 x 100 x 50 spheres, 10 MB of them.
 const SIDES: [u32; 3] = [100, 100, 50];
 
 pub fn a_course_render_copies_no_geometry() {
-    let mut scene = Scene {
-        name: "500k spheres".into(),
-        background: Vec3::new(0.2, 0.4, 0.6),
-        has_camera: true,
-        ..Scene::default()
-    };
-    scene.materials.push(Material::DEFAULT);
-    let spheres = &mut scene.geometry.spheres;
-    for x in 0..SIDES[0] {
-        for y in 0..SIDES[1] {
-            for z in 0..SIDES[2] {
-                spheres.centre.push(Vec3::new(x as f32, y as f32, z as f32));
-                spheres.radius.push(0.25);
-                spheres.material.push(0);
-            }
-        }
-    }
-    scene.camera = CameraSpec {
-        from: Vec3::new(49.6, 49.6, 200.0),
-        at: Vec3::new(49.6, 49.6, 0.0),
-        up: Vec3::Y,
-        angle: 50.0,
-        width: 32,
-        height: 24,
-        ..CameraSpec::default()
-    };
+    let scene = sphere_lattice(
+        "500k spheres",
+        SIDES,
+        Vec3::new(49.6, 49.6, 200.0),
+        [32, 24],
+    );
+    let spheres = &scene.geometry.spheres;
     let stored = spheres.centre.x.capacity() * 12 + spheres.radius.capacity() * 8;
     let peak = |profile| {
         let mut options = RenderOptions::from_scene(&scene);
