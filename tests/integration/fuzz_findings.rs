@@ -221,8 +221,8 @@ fn the_bvh_finds_a_shadow_ray_from_1e9_away() {
 /// reports a hit at t = 1e9, where the ray is nowhere near the cone: brute force finds it,
 /// the grid, which trusts the cone's box, does not. Fixed in `intersect::cone`, whose
 /// quadratic is now taken from the ray's point nearest the cone (its discriminant was
-/// the noise of two numbers of 1e18), and by the structures' hit rule
-/// (`accel::bounds::admits`), which drops a cone's hit outside its box in every structure.
+/// the noise of two numbers of 1e18), and by the hit rule (`accel::bounds`): no routine
+/// reports a hit outside its primitive's trusted box, so no structure sees one.
 #[test]
 fn thin_cone_seen_from_1e9_away_is_missed() {
     let cases = [
@@ -507,8 +507,8 @@ fn crash_37bf_agrees_with_the_standard_profile() {
 /// without allowing for the rounding of where the next cells start; its walk now does
 /// (`accel::grid::Dda`), and the two agree. The BVH still gave another image: a textbook
 /// root lay outside the sphere's padded box, where brute force kept it and the tree did
-/// not look. Fixed by the structures' hit rule (`accel::bounds::admits`): a sphere's hit
-/// counts only inside its box's interval, in every structure, so all three agree (the
+/// not look. Fixed by the hit rule (`accel::bounds`): a sphere's hit counts only inside
+/// its trusted box's interval, in every structure, so all three agree (the
 /// same fix for crash-6c89, crash-c9e9, crash-81b9 and crash-8fc3, below).
 #[test]
 fn crash_37bf_agrees_with_the_course_profile() {
