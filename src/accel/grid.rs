@@ -197,9 +197,7 @@ impl Structure for Grid {
             self.walk(query, t_max, |cell_refs, _| {
                 blocked = cell_refs.iter().any(|&r| {
                     mailbox.first_visit(r)
-                        && geometry
-                            .intersect(self.prims[r as usize], query, t_max)
-                            .is_some()
+                        && (geometry.intersect(self.prims[r as usize], query, t_max)).is_some()
                 });
                 if blocked {
                     Walk::Stop

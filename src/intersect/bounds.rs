@@ -62,8 +62,7 @@ impl Aabb {
 
     /// The box grown by a margin relative to its coordinates (`1e-6` of the largest
     /// magnitude, and the least normal float), so that rounding in the intersection
-    /// routines seldom puts a hit outside it: how every structure holds a primitive
-    /// (`accel::bounds`), and the box a triangle's test checks its hits against.
+    /// routines seldom puts a hit outside it: the last step of [`trusted_box`].
     #[inline]
     pub fn with_rounding_margin(self) -> Aabb {
         let scale = self.min.abs().max(self.max.abs()).max_element();

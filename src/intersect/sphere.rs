@@ -250,8 +250,8 @@ fn sphere8(query: &RayQuery8, centre: Vec3, radius: f32, t_max: F32x8, active: u
     TriangleHit8::at((hit & query.holds(trusted, t), t))
 }
 
-/// The box the structures hold a sphere in, with the margin of the profile's roots: its
-/// hits count only inside it (`intersect::bounds`).
+/// The box the structures hold a sphere in ([`trusted_box`], with the margin of the
+/// profile's roots): its hits count only inside it.
 #[inline]
 pub(super) fn trusted_sphere_box(
     centre: Vec3,
