@@ -178,12 +178,7 @@ impl F32x8 {
     pub fn powf(self, exponent: Self, lanes: Mask8) -> Self {
         let (base, exponent) = (self.to_array(), exponent.to_array());
         let mut power = [0.0; 8];
-        let mut bits = lanes.bitmask();
-        while bits != 0 {
-            let k = bits.trailing_zeros() as usize;
-            power[k] = base[k].powf(exponent[k]);
-            bits &= bits - 1;
-        }
+        for_lanes(lanes.bitmask(), |k| power[k] = base[k].powf(exponent[k]));
         F32x8::from_array(power)
     }
 
@@ -307,6 +302,16 @@ impl Mask8 {
             y: self.select(if_true.y, if_false.y),
             z: self.select(if_true.z, if_false.z),
         }
+    }
+}
+
+/// Calls `f` with the index of each set bit of `mask` (a [`Mask8::bitmask`]), lowest
+/// first.
+#[inline]
+pub fn for_lanes(mut mask: u8, mut f: impl FnMut(usize)) {
+    while mask != 0 {
+        f(mask.trailing_zeros() as usize);
+        mask &= mask - 1;
     }
 }
 

@@ -20,13 +20,13 @@ use std::cell::RefCell;
 use glam::{IVec3, UVec3, Vec3};
 
 use super::bounds::prim_bounds;
-use super::hit::{for_lanes, test_packet, ClosestHit};
+use super::hit::{test_packet, ClosestHit};
 use super::structure::Structure;
 use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay, RayQuery, RayQuery8};
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::scene::Geometry;
-use crate::simd::F32x8;
+use crate::simd::{for_lanes, F32x8};
 
 /// The report's `m`.
 pub const DEFAULT_DENSITY: f32 = 2.0;

@@ -5,7 +5,7 @@ use crate::intersect::{RayQuery, RayQuery8};
 use crate::prim::PrimId;
 use crate::ray::Hit;
 use crate::scene::Geometry;
-use crate::simd::F32x8;
+use crate::simd::{for_lanes, F32x8};
 
 /// The closest hit found so far along a ray, with the tie rule of brute force: at equal
 /// `t` the smaller [`PrimId`] wins, whatever order the primitives are tested in.
@@ -92,13 +92,4 @@ pub fn test_packet(
             v: v[k],
         });
     });
-}
-
-/// Calls `f` with the index of each set bit of `mask`, lowest first.
-#[inline]
-pub fn for_lanes(mut mask: u8, mut f: impl FnMut(usize)) {
-    while mask != 0 {
-        f(mask.trailing_zeros() as usize);
-        mask &= mask - 1;
-    }
 }

@@ -1,10 +1,11 @@
 //! [`Structure`], the queries every acceleration structure answers over the bounded
 //! primitives of a [`Geometry`] (planes are [`Tracer`](super::Tracer)'s).
 
-use super::hit::{for_lanes, ClosestHit};
+use super::hit::ClosestHit;
 use crate::intersect::{RayQuery, RayQuery8};
 use crate::ray::lane_mask;
 use crate::scene::Geometry;
+use crate::simd::for_lanes;
 
 /// An acceleration structure's queries, each answered as brute force answers it
 /// (`accel::ClosestHit`'s tie rule). A structure without a packet walk of its own

@@ -1,5 +1,5 @@
 //! Axis-aligned boxes: each kind's bounds, and the margin the grid and the BVHs grow
-//! them by ([`Aabb::with_rounding_margin`], with its SIMD twin for eight boxes).
+//! them by ([`trusted_box`], with its SIMD twin for eight boxes).
 
 use glam::Vec3;
 
@@ -64,7 +64,7 @@ impl Aabb {
     /// magnitude, and the least normal float), so that rounding in the intersection
     /// routines seldom puts a hit outside it: the last step of [`trusted_box`].
     #[inline]
-    pub fn with_rounding_margin(self) -> Aabb {
+    fn with_rounding_margin(self) -> Aabb {
         let scale = self.min.abs().max(self.max.abs()).max_element();
         self.padded(scale * 1e-6 + f32::MIN_POSITIVE)
     }

@@ -28,7 +28,7 @@ use super::{
     Shapes, SurfacePoint, Vec3s,
 };
 use crate::ray::{Ray, RayPacket};
-use crate::simd::{F32x8, Mask8, Vec3x8};
+use crate::simd::{for_lanes, F32x8, Mask8, Vec3x8};
 
 /// Distance and barycentric coordinates of a ray-triangle hit: the point is
 /// `(1 - u - v) p0 + u p1 + v p2`.
@@ -59,6 +59,22 @@ pub fn triangle(
     t_min: f32,
     t_max: f32,
 ) -> Option<TriangleHit> {
+    let query = || RayQuery::new(ray, t_min, IntersectOptions::default());
+    triangle_hit(ray, [p0, e1, e2], t_min, t_max, query)
+}
+
+/// The body of [`triangle`], with `query` giving the ray's query for the box test, made
+/// only for a candidate (a caller with one at hand passes it). Out of line, as
+/// [`triangle`] was: inlined, it grows `Geometry::intersect` for every kind (+0.4% on
+/// `bench balls_high`).
+#[inline(never)]
+fn triangle_hit(
+    ray: &Ray,
+    [p0, e1, e2]: [Vec3; 3],
+    t_min: f32,
+    t_max: f32,
+    query: impl Fn() -> RayQuery,
+) -> Option<TriangleHit> {
     let p = ray.dir.cross(e2);
     let det = e1.dot(p);
     if det == 0.0 || !det.is_finite() {
@@ -79,11 +95,11 @@ pub fn triangle(
     if !(t > t_min) {
         return None;
     }
-    if in_trusted_box(ray, [p0, e1, e2], t_min, t) {
+    let query = query();
+    if in_trusted_box(&query, [p0, e1, e2], t) {
         return (t < t_max).then_some(TriangleHit { t, u, v });
     }
-    refined(ray, p0, e1, e2, t_min, t_max)
-        .filter(|hit| in_trusted_box(ray, [p0, e1, e2], t_min, hit.t))
+    refined(ray, p0, e1, e2, t_min, t_max).filter(|hit| in_trusted_box(&query, [p0, e1, e2], hit.t))
 }
 
 /// The box of the corners of `p0, e1, e2`, as [`Triangles`] bounds it for the structures;
@@ -97,13 +113,17 @@ fn corner_box([p0, e1, e2]: [Vec3; 3]) -> Option<Aabb> {
     })
 }
 
-/// Whether the hit at `t` of the triangle `p0, e1, e2` lies where the structures look for
-/// it: in its trusted box, by their box test ([`RayQuery::holds`]).
+/// The box the structures hold the triangle `p0, e1, e2` in ([`trusted_box`]).
+#[inline]
+fn trusted_triangle_box(triangle: [Vec3; 3]) -> Option<Aabb> {
+    corner_box(triangle).and_then(|tight| trusted_box(tight, 0.0))
+}
+
+/// Whether the hit at `t` of the triangle `p0, e1, e2` along `query` lies where the
+/// structures look for it: in its trusted box, by their box test ([`RayQuery::holds`]).
 #[inline(never)]
-fn in_trusted_box(ray: &Ray, triangle: [Vec3; 3], t_min: f32, t: f32) -> bool {
-    let query = RayQuery::new(ray, t_min, IntersectOptions::default());
-    let trusted = corner_box(triangle).and_then(|tight| trusted_box(tight, 0.0));
-    query.holds(trusted, t)
+fn in_trusted_box(query: &RayQuery, triangle: [Vec3; 3], t: f32) -> bool {
+    query.holds(trusted_triangle_box(triangle), t)
 }
 
 /// Möller-Trumbore in double precision from the single-precision inputs: the hit of a
@@ -161,16 +181,18 @@ fn refine_lanes(
     let mut mask = hits.hit.bitmask();
     let (mut t, mut u, mut v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
     let (t_min, t_max) = (t_min.to_array(), t_max.to_array());
-    for k in (0..8).filter(|k| doubtful & (1 << k) != 0) {
+    for_lanes(doubtful, |k| {
         let (ray, triangle) = lane(k);
         let [p0, e1, e2] = triangle;
-        let hit = refined(&ray, p0, e1, e2, t_min[k], t_max[k])
-            .filter(|hit| in_trusted_box(&ray, triangle, t_min[k], hit.t));
+        let hit = refined(&ray, p0, e1, e2, t_min[k], t_max[k]).filter(|hit| {
+            let query = RayQuery::new(&ray, t_min[k], IntersectOptions::default());
+            in_trusted_box(&query, triangle, hit.t)
+        });
         if let Some(hit) = hit {
             (t[k], u[k], v[k]) = (hit.t, hit.u, hit.v);
             mask |= 1 << k;
         }
-    }
+    });
     *hits = TriangleHit8 {
         hit: Mask8::from_bitmask(mask),
         t: F32x8::from_array(t),
@@ -264,8 +286,7 @@ pub fn triangle_packet(
     );
     hits.hit = hits.hit & Mask8::from_bitmask(active);
     if hits.hit.any() {
-        let trusted = corner_box([p0, e1, e2]).and_then(|tight| trusted_box(tight, 0.0));
-        let trusted = trusted.map_or(Mask8::from_bitmask(0), |b| {
+        let trusted = trusted_triangle_box([p0, e1, e2]).map_or(Mask8::from_bitmask(0), |b| {
             BoxRay8::new(rays).holds(b.min, b.max, t_min, hits.t)
         });
         settle(
@@ -442,8 +463,8 @@ impl Shapes for Triangles {
 
     #[inline]
     fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
-        let (p0, e1, e2) = (self.p0.get(i), self.e1.get(i), self.e2.get(i));
-        triangle(&query.ray, p0, e1, e2, query.t_min, t_max)
+        let triangle = [self.p0.get(i), self.e1.get(i), self.e2.get(i)];
+        triangle_hit(&query.ray, triangle, query.t_min, t_max, || *query)
     }
 
     fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {

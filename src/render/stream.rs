@@ -22,7 +22,7 @@ use super::shade::{Phong8, RayCounts, RayKind, Shader, Surface, EPS};
 use crate::accel::stream::{self, Occlusions, Query};
 use crate::intersect::spawn_origin8;
 use crate::ray::Ray;
-use crate::simd::{F32x8, Mask8, Vec3x8};
+use crate::simd::{for_lanes, F32x8, Mask8, Vec3x8};
 
 /// The rays of one depth, and what they bring back.
 pub(super) struct Queue<'a> {
@@ -168,16 +168,16 @@ fn shade_depth<'a>(
             // The scalar sum skips an unlit light: its lanes keep their bits.
             colour = lit.select_vec(colour + added, colour);
         }
-        for k in lanes(block.lanes) {
-            queue.colour[block.ray[k] as usize] = colour.lane(k);
-        }
+        for_lanes(block.lanes, |k| {
+            queue.colour[block.ray[k] as usize] = colour.lane(k)
+        });
     }
 
     // A hit spawns a reflected and a transmitted ray at most.
     let mut next = Queue::with_capacity_in(2 * n, arena);
     if depth < shader.options.max_depth {
         for block in &blocks {
-            for k in lanes(block.lanes) {
+            for_lanes(block.lanes, |k| {
                 let i = block.ray[k] as usize;
                 let material = &shader.scene.materials[block.material[k] as usize];
                 let surface = block.surface(k);
@@ -186,21 +186,10 @@ fn shade_depth<'a>(
                     rays.add(child.kind, 1);
                     next.push(child.ray, child.sample, child.ior, i as u32, child.weight);
                 });
-            }
+            });
         }
     }
     next
-}
-
-/// The indices of the set bits of `bits`, lowest first.
-fn lanes(mut bits: u8) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        (bits != 0).then(|| {
-            let k = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            k
-        })
-    })
 }
 
 /// Eight hits of a depth as structure of arrays, for the shading of eight at a time.
@@ -369,7 +358,7 @@ impl<'a> ShadowQueue<'a> {
                 let sample = |k: usize| queue.samples[block.ray[k] as usize];
                 let (facing, incident) = emitter.sample8(index, &receiver, sample);
                 let facing = facing.bitmask() & block.lanes;
-                for k in lanes(facing) {
+                for_lanes(facing, |k| {
                     let ray = Ray {
                         origin: block.origin.lane(k),
                         dir: incident.dir.lane(k),
@@ -382,7 +371,7 @@ impl<'a> ShadowQueue<'a> {
                             distance: incident.distance.lane(k),
                         },
                     );
-                }
+                });
                 dir.push(incident.dir);
                 lit.push(facing);
             }
@@ -391,11 +380,11 @@ impl<'a> ShadowQueue<'a> {
         // The answers come in the order the rays were pushed: light, block, lane.
         let mut answers = blocked.iter();
         for lanes_lit in lit.iter_mut() {
-            for k in lanes(*lanes_lit) {
+            for_lanes(*lanes_lit, |k| {
                 if answers.next() == Some(&true) {
                     *lanes_lit &= !(1 << k);
                 }
-            }
+            });
         }
         ShadowQueue {
             lights,

@@ -6,12 +6,12 @@
 
 use super::node::{leaf_parts, leaf_ref, pack_code, ChildRef};
 use super::packet::lanes_of;
-use crate::accel::hit::{for_lanes, ClosestHit};
+use crate::accel::hit::ClosestHit;
 use crate::intersect::{LeafPack, RayQuery, RayQuery8};
 use crate::prim::{packed_kinds, PrimId, PrimKind};
 use crate::ray::Hit;
 use crate::scene::Geometry;
-use crate::simd::F32x8;
+use crate::simd::{for_lanes, F32x8};
 
 /// The packs of one packed kind, and the ids of each pack's primitives lane by lane.
 #[derive(Clone, Debug)]

@@ -8,11 +8,11 @@
 
 use super::node::{ChildRef, Node8, LEAF};
 use super::{Bvh8, STACK_SIZE};
-use crate::accel::hit::{for_lanes, ClosestHit};
+use crate::accel::hit::ClosestHit;
 use crate::accel::stack::Stack;
 use crate::intersect::{beyond8, BoxRay8, RayQuery8, RayRange};
 use crate::scene::Geometry;
-use crate::simd::{F32x8, Mask8};
+use crate::simd::{for_lanes, F32x8, Mask8};
 
 /// A packet whose lanes in a subtree drop to this many finishes it one ray at a time.
 const SINGLE_RAY_LANES: u32 = 2;

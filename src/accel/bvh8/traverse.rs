@@ -3,10 +3,11 @@
 
 use super::node::{leaf_parts, ChildRef, LEAF};
 use super::{Bvh8, STACK_SIZE};
-use crate::accel::hit::{for_lanes, ClosestHit};
+use crate::accel::hit::ClosestHit;
 use crate::accel::stack::Stack;
 use crate::intersect::{beyond, BoxRay, RayQuery};
 use crate::scene::Geometry;
+use crate::simd::for_lanes;
 
 impl Bvh8 {
     /// Tests the primitives of leaf `child`, keeping the winner in `closest`.
