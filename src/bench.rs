@@ -184,16 +184,16 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
         let i = hit.prim.index();
         let normal = match hit.prim.kind() {
             PrimKind::Sphere => {
-                let s = &g.spheres;
-                (p - s.centre.get(i).as_dvec3()) / s.radius[i] as f64
+                let s = &g.spheres.records[i];
+                (p - s.centre.as_dvec3()) / s.radius as f64
             }
             PrimKind::MovingSphere => {
                 let s = &g.moving_spheres;
                 (p - s.centre_at(i, 0.0).as_dvec3()) / s.radius[i] as f64
             }
             PrimKind::Triangle => {
-                let t = &g.triangles;
-                t.e1.get(i).cross(t.e2.get(i)).as_dvec3().normalize()
+                let t = &g.triangles.records[i];
+                t.e1.cross(t.e2).as_dvec3().normalize()
             }
             _ => g
                 .normal(hit.prim, p.as_vec3(), hit.u, hit.v, 0.0)

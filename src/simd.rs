@@ -315,6 +315,23 @@ pub fn for_lanes(mut mask: u8, mut f: impl FnMut(usize)) {
     }
 }
 
+/// Asks the cache for the lines holding `value` (its first and last bytes: a record of up
+/// to a line's size), to be read soon: a hint, which changes no result.
+#[inline]
+pub fn prefetch<T>(value: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch only hints the cache; it reads nothing and cannot fault, and
+    // both addresses lie within `value`.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let first = (value as *const T).cast::<i8>();
+        _mm_prefetch::<_MM_HINT_T0>(first);
+        _mm_prefetch::<_MM_HINT_T0>(first.add(std::mem::size_of::<T>().max(1) - 1));
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = value;
+}
+
 /// Every mask, by its bit mask.
 static MASKS: [[f32; 8]; 256] = {
     let mut table = [[0.0; 8]; 256];

@@ -229,8 +229,12 @@ fn aabb8(query: &RayQuery8, (min, max): (Vec3, Vec3), t_max: F32x8, active: u8) 
 }
 
 impl Shapes for Boxes {
-    fn materials(&self) -> &[u32] {
-        &self.material
+    fn len(&self) -> usize {
+        self.material.len()
+    }
+
+    fn material(&self, i: usize) -> u32 {
+        self.material[i]
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {

@@ -157,8 +157,12 @@ pub struct Cones {
 }
 
 impl Shapes for Cones {
-    fn materials(&self) -> &[u32] {
-        &self.material
+    fn len(&self) -> usize {
+        self.material.len()
+    }
+
+    fn material(&self, i: usize) -> u32 {
+        self.material[i]
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {

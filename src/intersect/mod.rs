@@ -1,9 +1,12 @@
 //! Ray-primitive intersection routines and the storage of each primitive kind, one file
 //! per kind (`moving_sphere.rs` reuses the sphere's routines).
 //!
-//! Each kind's storage is structure of arrays ([`Vec3s`] and plain `Vec`s, one array per
-//! field) and implements [`Shapes`]: count, material, bounds, the scalar and packet
-//! tests, the normal. [`crate::scene::Geometry`] holds one storage per kind of the list
+//! Each kind's storage implements [`Shapes`]: count, material, bounds, the scalar and
+//! packet tests, the normal, the surface point. It is structure of arrays ([`Vec3s`] and
+//! plain `Vec`s, one array per field), except for the kinds that fill BVH leaves: their
+//! SIMD tests read the leaves' packs (eight primitives side by side), so their storage
+//! is read a primitive at a time, by each hit's surface point, and holds a record per
+//! primitive ([`Triangle`], [`Sphere`]) that one or two cache lines bring. [`crate::scene::Geometry`] holds one storage per kind of the list
 //! in [`crate::prim`] and dispatches to them.
 //!
 //! Every routine has the same contract: given a ray with a unit direction and an open
@@ -38,11 +41,12 @@ pub use interval::{
 pub use moving_sphere::MovingSpheres;
 pub use plane::{plane, plane_packet, Planes};
 pub use sphere::{
-    sphere, sphere_leaf, sphere_packet, sphere_textbook, SpherePack8, SphereRoots, Spheres,
+    sphere, sphere_leaf, sphere_packet, sphere_textbook, Sphere, SpherePack8, SphereRoots, Spheres,
     MIN_RADIUS,
 };
 pub use triangle::{
-    triangle, triangle_leaf, triangle_packet, TriangleHit, TriangleHit8, TrianglePack8, Triangles,
+    triangle, triangle_leaf, triangle_packet, Triangle, TriangleHit, TriangleHit8, TrianglePack8,
+    Triangles,
 };
 
 use glam::Vec3;
@@ -53,20 +57,19 @@ use crate::simd::{F32x8, Mask8, Vec3x8};
 /// The storage of one primitive kind, and what the layers above ask of a primitive `i`
 /// of it. Implemented in the kind's own file; [`crate::scene::Geometry`] dispatches to it.
 pub trait Shapes {
-    /// Each primitive's material, one entry per primitive: it also counts them.
-    fn materials(&self) -> &[u32];
-
-    fn len(&self) -> usize {
-        self.materials().len()
-    }
+    /// The number of primitives.
+    fn len(&self) -> usize;
 
     fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
-    fn material(&self, i: usize) -> u32 {
-        self.materials()[i]
-    }
+    /// Primitive `i`'s material.
+    fn material(&self, i: usize) -> u32;
+
+    /// Asks the cache for what a hit on primitive `i` will read, for a hit found now and
+    /// shaded later. A hint: nothing by default.
+    fn prefetch(&self, _i: usize) {}
 
     /// The tight box, over the whole `shutter` for moving primitives; all of space for an
     /// unbounded kind (which no structure holds).

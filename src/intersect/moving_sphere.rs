@@ -32,8 +32,12 @@ impl MovingSpheres {
 }
 
 impl Shapes for MovingSpheres {
-    fn materials(&self) -> &[u32] {
-        &self.material
+    fn len(&self) -> usize {
+        self.material.len()
+    }
+
+    fn material(&self, i: usize) -> u32 {
+        self.material[i]
     }
 
     /// The centre moves on a line, so the boxes at the shutter's two ends cover the path.

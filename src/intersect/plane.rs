@@ -47,8 +47,12 @@ pub struct Planes {
 }
 
 impl Shapes for Planes {
-    fn materials(&self) -> &[u32] {
-        &self.material
+    fn len(&self) -> usize {
+        self.material.len()
+    }
+
+    fn material(&self, i: usize) -> u32 {
+        self.material[i]
     }
 
     /// All of space: planes are unbounded, and no structure holds them.

@@ -7,11 +7,11 @@ use glam::Vec3;
 use super::{first_root_in, first_root_in8};
 use super::{
     gamma, trusted_box, Aabb, BoxPack8, IntersectOptions, LeafPack, RayQuery, RayQuery8, Shapes,
-    SurfacePoint, TriangleHit, TriangleHit8, Vec3s,
+    SurfacePoint, TriangleHit, TriangleHit8,
 };
 
 use crate::ray::{Ray, RayPacket};
-use crate::simd::{F32x8, Mask8, Vec3x8};
+use crate::simd::{prefetch, F32x8, Mask8, Vec3x8};
 
 /// How the sphere test solves its quadratic.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -190,11 +190,32 @@ fn sphere_lanes<const TEXTBOOK: bool>(
     (hit & real, t)
 }
 
+/// Spheres, one [`Sphere`] record each: the SIMD tests read the leaf packs
+/// ([`SpherePack8`], structure of arrays), so this storage is read one sphere at a time,
+/// by a hit's surface point above all, where a record is one cache line or two and an
+/// array per field five.
 #[derive(Clone, Debug, Default)]
 pub struct Spheres {
-    pub centre: Vec3s,
-    pub radius: Vec<f32>,
-    pub material: Vec<u32>,
+    pub records: Vec<Sphere>,
+}
+
+/// One sphere of [`Spheres`]: 20 bytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct Sphere {
+    pub centre: Vec3,
+    pub radius: f32,
+    pub material: u32,
+}
+
+impl Spheres {
+    pub fn push(&mut self, centre: Vec3, radius: f32, material: u32) {
+        self.records.push(Sphere {
+            centre,
+            radius,
+            material,
+        });
+    }
 }
 
 impl LeafPack for Spheres {
@@ -202,7 +223,7 @@ impl LeafPack for Spheres {
 
     fn pack(&self, indices: impl Iterator<Item = usize>) -> SpherePack8 {
         let spheres: Vec<(Vec3, f32)> = indices
-            .map(|i| (self.centre.get(i), self.radius[i]))
+            .map(|i| (self.records[i].centre, self.records[i].radius))
             .collect();
         SpherePack8::new(&spheres)
     }
@@ -300,18 +321,28 @@ pub(super) fn sphere_bounds(centre: Vec3, radius: f32) -> Aabb {
 }
 
 impl Shapes for Spheres {
-    fn materials(&self) -> &[u32] {
-        &self.material
+    fn len(&self) -> usize {
+        self.records.len()
+    }
+
+    fn material(&self, i: usize) -> u32 {
+        self.records[i].material
+    }
+
+    fn prefetch(&self, i: usize) {
+        if let Some(record) = self.records.get(i) {
+            prefetch(record);
+        }
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {
-        sphere_bounds(self.centre.get(i), self.radius[i])
+        sphere_bounds(self.records[i].centre, self.records[i].radius)
     }
 
     #[inline]
     fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
         let (ray, t_min) = (&query.ray, query.t_min);
-        let (centre, radius) = (self.centre.get(i), self.radius[i]);
+        let Sphere { centre, radius, .. } = self.records[i];
         match query.options.sphere_roots {
             SphereRoots::Precise => sphere(ray, centre, radius, t_min, t_max),
             SphereRoots::Textbook => sphere_textbook(ray, centre, radius, t_min, t_max),
@@ -321,15 +352,23 @@ impl Shapes for Spheres {
     }
 
     fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
-        sphere8(query, self.centre.get(i), self.radius[i], t_max, active)
+        sphere8(
+            query,
+            self.records[i].centre,
+            self.records[i].radius,
+            t_max,
+            active,
+        )
     }
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {
-        ((p - self.centre.get(i)) / self.radius[i]).normalize_or_zero()
+        let Sphere { centre, radius, .. } = self.records[i];
+        ((p - centre) / radius).normalize_or_zero()
     }
 
     fn surface_point(&self, i: usize, ray: &Ray, t: f32, _u: f32, _v: f32) -> SurfacePoint {
-        sphere_surface_point(self.centre.get(i), self.radius[i], ray, t)
+        let Sphere { centre, radius, .. } = self.records[i];
+        sphere_surface_point(centre, radius, ray, t)
     }
 }
 

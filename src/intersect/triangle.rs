@@ -25,10 +25,10 @@ use glam::Vec3;
 
 use super::{
     gamma, trusted_box, Aabb, BoxPack8, BoxRay8, IntersectOptions, LeafPack, RayQuery, RayQuery8,
-    Shapes, SurfacePoint, Vec3s,
+    Shapes, SurfacePoint,
 };
 use crate::ray::{Ray, RayPacket};
-use crate::simd::{for_lanes, F32x8, Mask8, Vec3x8};
+use crate::simd::{for_lanes, prefetch, F32x8, Mask8, Vec3x8};
 
 /// Distance and barycentric coordinates of a ray-triangle hit: the point is
 /// `(1 - u - v) p0 + u p1 + v p2`.
@@ -367,17 +367,38 @@ fn triangle_lanes(
     TriangleHit8 { hit, t, u, v }
 }
 
-/// Triangles stored as a vertex and two edges (what Möller-Trumbore reads). Degenerate
-/// triangles are stored with zero edges, which the test never hits.
+/// Triangles stored as a vertex and two edges (what Möller-Trumbore reads), one
+/// [`Triangle`] record each. Degenerate triangles are stored with zero edges, which the
+/// test never hits.
+///
+/// Records, not an array per coordinate: the SIMD tests read the leaf packs
+/// ([`TrianglePack8`], structure of arrays), so this storage is read one triangle at a
+/// time, by a hit's surface point above all, where nine coordinate arrays and two of
+/// indices cost eleven cache lines and a record one or two.
 #[derive(Clone, Debug, Default)]
 pub struct Triangles {
-    pub p0: Vec3s,
-    pub e1: Vec3s,
-    pub e2: Vec3s,
-    pub material: Vec<u32>,
-    /// Index into `vertex_normals` for smooth (`pp`) triangles, `FLAT` otherwise.
-    pub shading: Vec<u32>,
+    pub records: Vec<Triangle>,
     pub vertex_normals: Vec<[Vec3; 3]>,
+}
+
+/// One triangle of [`Triangles`]: 44 bytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct Triangle {
+    pub p0: Vec3,
+    pub e1: Vec3,
+    pub e2: Vec3,
+    pub material: u32,
+    /// Index into `vertex_normals` for smooth (`pp`) triangles, [`Triangles::FLAT`]
+    /// otherwise.
+    pub shading: u32,
+}
+
+impl Triangle {
+    /// The vertex and the two edges.
+    pub fn vertex_and_edges(&self) -> [Vec3; 3] {
+        [self.p0, self.e1, self.e2]
+    }
 }
 
 impl Triangles {
@@ -391,28 +412,32 @@ impl Triangles {
         } else {
             (e1, e2)
         };
-        self.p0.push(p[0]);
-        self.e1.push(e1);
-        self.e2.push(e2);
-        self.material.push(material);
-        match normals {
+        let shading = match normals {
             Some(n) => {
-                self.shading.push(self.vertex_normals.len() as u32);
                 self.vertex_normals.push(n);
+                self.vertex_normals.len() as u32 - 1
             }
-            None => self.shading.push(Self::FLAT),
-        }
+            None => Self::FLAT,
+        };
+        self.records.push(Triangle {
+            p0: p[0],
+            e1,
+            e2,
+            material,
+            shading,
+        });
     }
 
     /// Unit geometric normal `normalize(e1 x e2)`.
     pub fn geometric_normal(&self, i: usize) -> Vec3 {
-        self.e1.get(i).cross(self.e2.get(i)).normalize_or_zero()
+        let triangle = &self.records[i];
+        triangle.e1.cross(triangle.e2).normalize_or_zero()
     }
 
     /// [`Shapes::normal`] at `(u, v)`, with the geometric normal made by `geometric` only
     /// where it is needed, so that a caller holding `e1 x e2` need not take it again.
-    fn shading_normal(&self, i: usize, u: f32, v: f32, geometric: impl Fn() -> Vec3) -> Vec3 {
-        match self.shading[i] {
+    fn shading_normal(&self, shading: u32, u: f32, v: f32, geometric: impl Fn() -> Vec3) -> Vec3 {
+        match shading {
             Self::FLAT => geometric(),
             k => {
                 let n = self.vertex_normals[k as usize];
@@ -429,7 +454,7 @@ impl LeafPack for Triangles {
 
     fn pack(&self, indices: impl Iterator<Item = usize>) -> TrianglePack8 {
         let tris: Vec<[Vec3; 3]> = indices
-            .map(|i| [self.p0.get(i), self.e1.get(i), self.e2.get(i)])
+            .map(|i| self.records[i].vertex_and_edges())
             .collect();
         TrianglePack8::new(&tris)
     }
@@ -453,29 +478,44 @@ impl LeafPack for Triangles {
 }
 
 impl Shapes for Triangles {
-    fn materials(&self) -> &[u32] {
-        &self.material
+    fn len(&self) -> usize {
+        self.records.len()
+    }
+
+    fn material(&self, i: usize) -> u32 {
+        self.records[i].material
+    }
+
+    fn prefetch(&self, i: usize) {
+        if let Some(record) = self.records.get(i) {
+            prefetch(record);
+        }
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {
-        corner_box([self.p0.get(i), self.e1.get(i), self.e2.get(i)]).unwrap_or(Aabb::EMPTY)
+        corner_box(self.records[i].vertex_and_edges()).unwrap_or(Aabb::EMPTY)
     }
 
     #[inline]
     fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
-        let triangle = [self.p0.get(i), self.e1.get(i), self.e2.get(i)];
-        triangle_hit(&query.ray, triangle, query.t_min, t_max, || *query)
+        triangle_hit(
+            &query.ray,
+            self.records[i].vertex_and_edges(),
+            query.t_min,
+            t_max,
+            || *query,
+        )
     }
 
     fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
-        let (p0, e1, e2) = (self.p0.get(i), self.e1.get(i), self.e2.get(i));
+        let [p0, e1, e2] = self.records[i].vertex_and_edges();
         triangle_packet(query.packet, p0, e1, e2, query.t_min8(), t_max, active)
     }
 
     /// The geometric normal of P3F.md section 2 (triangles have no inside), or for smooth
     /// triangles the vertex normals interpolated at `(u, v)`.
     fn normal(&self, i: usize, _p: Vec3, u: f32, v: f32, _time: f32) -> Vec3 {
-        self.shading_normal(i, u, v, || self.geometric_normal(i))
+        self.shading_normal(self.records[i].shading, u, v, || self.geometric_normal(i))
     }
 
     /// `p0 + u e1 + v e2`, a point of the plane the test sees whatever `u` and `v` are. Its
@@ -485,7 +525,13 @@ impl Shapes for Triangles {
     /// `|o - p0| |e1| |e2|`, which is `|o - p0| / sin(angle between e1 and e2)` along the
     /// normal, so a sliver's bound grows with its skew.
     fn surface_point(&self, i: usize, _ray: &Ray, _t: f32, u: f32, v: f32) -> SurfacePoint {
-        let (p0, e1, e2) = (self.p0.get(i), self.e1.get(i), self.e2.get(i));
+        let Triangle {
+            p0,
+            e1,
+            e2,
+            shading,
+            ..
+        } = self.records[i];
         let (along1, along2) = (u * e1, v * e2);
         let point = p0 + along1 + along2;
         // One cross product for the bound's area and the normal.
@@ -500,7 +546,7 @@ impl Shapes for Triangles {
         SurfacePoint {
             point,
             error: gamma(7) * (p0.abs() + along1.abs() + along2.abs()) + Vec3::splat(product),
-            normal: self.shading_normal(i, u, v, || cross.normalize_or_zero()),
+            normal: self.shading_normal(shading, u, v, || cross.normalize_or_zero()),
         }
     }
 }

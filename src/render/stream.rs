@@ -132,10 +132,14 @@ fn shade_depth<'a>(
 ) -> Queue<'a> {
     let n = queue.len();
     let mut hits = ArenaVec::with_capacity_in(n, arena);
-    stream::closest(shader.tracer, &queue.rays, |_, found| {
-        hits.extend_from_slice(found)
-    });
     let geometry = &shader.tracer.geometry;
+    stream::closest(shader.tracer, &queue.rays, |_, found| {
+        hits.extend_from_slice(found);
+        // Shaded once the whole depth is traced: its record reaches the cache meanwhile.
+        for hit in found.iter().flatten() {
+            geometry.prefetch(hit.prim);
+        }
+    });
     let mut blocks = HitBlocks::with_capacity_in(n, arena);
     for (i, (hit, ray)) in hits.iter().zip(&queue.rays).enumerate() {
         match hit {

@@ -1,7 +1,7 @@
-//! All primitives of a scene: one structure-of-arrays storage per kind of the list in
-//! [`crate::prim`], and the dispatch from a [`PrimId`] to its kind's [`Shapes`], both
-//! generated from that list. Planes are unbounded and kept apart from the rest:
-//! accelerators never hold them.
+//! All primitives of a scene: one storage per kind of the list in [`crate::prim`]
+//! (structure of arrays, or records for the kinds of the BVH's leaf packs), and the
+//! dispatch from a [`PrimId`] to its kind's [`Shapes`], both generated from that list.
+//! Planes are unbounded and kept apart from the rest: accelerators never hold them.
 
 use glam::Vec3;
 
@@ -26,6 +26,14 @@ macro_rules! define_geometry {
             pub fn count(&self, kind: PrimKind) -> usize {
                 match kind {
                     $(PrimKind::$kind => self.$field.len(),)*
+                }
+            }
+
+            /// Asks the cache for what `prim`'s hit will read ([`Shapes::prefetch`]).
+            #[inline]
+            pub fn prefetch(&self, prim: PrimId) {
+                match prim.kind() {
+                    $(PrimKind::$kind => self.$field.prefetch(prim.index()),)*
                 }
             }
 

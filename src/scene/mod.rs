@@ -1,4 +1,4 @@
-//! The scene model: geometry in structure-of-arrays form, materials, lights and camera,
+//! The scene model: geometry (a storage per primitive kind), materials, lights and camera,
 //! read from P3F files by [`p3f`].
 
 pub mod geometry;

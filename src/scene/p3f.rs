@@ -530,10 +530,7 @@ impl<'a> Parser<'a> {
                 let centre = self.point("the sphere's centre")?;
                 let radius = self.radius()?;
                 let material = self.object_material();
-                let s = &mut self.scene.geometry.spheres;
-                s.centre.push(centre);
-                s.radius.push(radius);
-                s.material.push(material);
+                self.scene.geometry.spheres.push(centre, radius, material);
             }
             "ms" | "sm" => {
                 let c0 = self.point("the centre at time t0")?;

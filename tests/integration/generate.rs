@@ -30,17 +30,19 @@ fn sphereflake_matches_the_course_files_sphere_for_sphere() {
         let course = parse_file(&shared.join(format!("scenes/{name}.p3f"))).unwrap();
         let ours = parse_text(&balls_scene(depth, None)).unwrap();
         let (a, b) = (&course.geometry.spheres, &ours.geometry.spheres);
-        assert_eq!(a.radius.len(), b.radius.len(), "{name}");
-        for i in 0..a.radius.len() {
-            let centre = (a.centre.get(i) - b.centre.get(i)).abs().max_element();
-            let radius = (a.radius[i] - b.radius[i]).abs();
+        assert_eq!(a.records.len(), b.records.len(), "{name}");
+        for i in 0..a.records.len() {
+            let centre = (a.records[i].centre - b.records[i].centre)
+                .abs()
+                .max_element();
+            let radius = (a.records[i].radius - b.records[i].radius).abs();
             assert!(
                 centre <= 1e-5 && radius <= 1e-5,
                 "{name} sphere {i}: course {} r {}, ours {} r {}",
-                a.centre.get(i),
-                a.radius[i],
-                b.centre.get(i),
-                b.radius[i]
+                a.records[i].centre,
+                a.records[i].radius,
+                b.records[i].centre,
+                b.records[i].radius
             );
         }
     }
@@ -139,13 +141,13 @@ fn mount_scenes_have_the_course_counts_and_spheres_clear_of_the_rock() {
     for (level, triangles) in [(1, 8), (5, 2048), (7, 32768)] {
         let scene = parse_text(&mount_scene(level, 0, None)).unwrap();
         let g = &scene.geometry;
-        assert_eq!(g.triangles.p0.x.len(), triangles, "level {level}");
-        assert_eq!(g.spheres.radius.len(), 4);
+        assert_eq!(g.triangles.records.len(), triangles, "level {level}");
+        assert_eq!(g.spheres.records.len(), 4);
         // The glass spheres float: every vertex below a sphere lies beneath its bottom.
         for s in 0..4 {
-            let (c, r) = (g.spheres.centre.get(s), g.spheres.radius[s]);
+            let (c, r) = (g.spheres.records[s].centre, g.spheres.records[s].radius);
             for t in 0..triangles {
-                let v = g.triangles.p0.get(t);
+                let v = g.triangles.records[t].p0;
                 if v.truncate().distance(c.truncate()) <= r {
                     assert!(
                         v.z < c.z - r,
@@ -161,23 +163,23 @@ fn mount_scenes_have_the_course_counts_and_spheres_clear_of_the_rock() {
 fn random_scene_follows_section_8() {
     let scene = parse_text(&random_scene(3, None)).unwrap();
     let s = &scene.geometry.spheres;
-    let n = s.radius.len();
+    let n = s.records.len();
     assert!(n > 60 && n <= 1 + 81 + 3, "{n} spheres");
     assert_eq!(
-        (s.centre.get(0), s.radius[0]),
+        (s.records[0].centre, s.records[0].radius),
         (Vec3::new(0., -1000., 0.), 1000.)
     );
     for i in 1..n - 3 {
-        let c = s.centre.get(i);
-        assert_eq!((c.y, s.radius[i]), (0.2, 0.2));
+        let c = s.records[i].centre;
+        assert_eq!((c.y, s.records[i].radius), (0.2, 0.2));
         assert!(c.distance(Vec3::new(4.0, 0.2, 0.0)) > 0.9);
-        let m = scene.materials[s.material[i] as usize];
+        let m = scene.materials[s.records[i].material as usize];
         let diffuse = m.kd == 1.0 && m.ks == 0.0;
         let metal = m.kd == 0.0 && m.ks == 1.0 && m.specular.min_element() >= 0.5;
         let glass = m.transmittance == 1.0 && m.ior == 1.5 && m.ks == 0.7;
         assert!(diffuse || metal || glass, "sphere {i}: {m:?}");
     }
-    let big: Vec<Vec3> = (n - 3..n).map(|i| s.centre.get(i)).collect();
+    let big: Vec<Vec3> = (n - 3..n).map(|i| s.records[i].centre).collect();
     assert_eq!(
         big,
         [
@@ -284,14 +286,14 @@ fn dragon_scene_places_a_gzipped_ply_model_on_the_floor() {
     let scene = parse_text(&dragon_scene(&mesh, "model.ply.gz", None)).unwrap();
     let t = &scene.geometry.triangles;
     // The floor square (two triangles) and the model's four.
-    assert_eq!(t.p0.x.len(), 2 + 4);
+    assert_eq!(t.records.len(), 2 + 4);
     assert_eq!(scene.mesh_triangles, 4);
     let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
     for i in 2..6 {
         for v in [
-            t.p0.get(i),
-            t.p0.get(i) + t.e1.get(i),
-            t.p0.get(i) + t.e2.get(i),
+            t.records[i].p0,
+            t.records[i].p0 + t.records[i].e1,
+            t.records[i].p0 + t.records[i].e2,
         ] {
             (lo, hi) = (lo.min(v), hi.max(v));
         }
@@ -305,7 +307,7 @@ fn dragon_scene_places_a_gzipped_ply_model_on_the_floor() {
         (lo.x + hi.x).abs() < 1e-5 && (lo.z + hi.z).abs() < 1e-5,
         "centred"
     );
-    assert_eq!(scene.geometry.spheres.radius.len(), 2);
+    assert_eq!(scene.geometry.spheres.records.len(), 2);
     assert_eq!(scene.geometry.boxes.min.x.len(), 1);
 }
 

@@ -75,9 +75,9 @@ fn mesh_negative_indices_count_from_the_end() {
     let scene =
         parse_text("f 1 1 1 1 0 0 0 0 1 0 1\nmesh 3 1\n0 0 0\n1 0 0\n0 1 0\n-3 -2 -1\n").unwrap();
     let t = &scene.geometry.triangles;
-    assert_eq!(t.p0.get(0), Vec3::ZERO);
-    assert_eq!(t.e1.get(0), Vec3::X);
-    assert_eq!(t.e2.get(0), Vec3::Y);
+    assert_eq!(t.records[0].p0, Vec3::ZERO);
+    assert_eq!(t.records[0].e1, Vec3::X);
+    assert_eq!(t.records[0].e2, Vec3::Y);
 }
 
 #[test]
@@ -93,14 +93,17 @@ fn lexical_rules_crlf_comments_and_no_final_newline() {
     let text = "# header comment\r\nf 1 1 1 1 0 0 0 0 1 0 1 #inline comment\r\ns 0 1.5 0 0.5 #main sphere\r\ns 1 2 3 4";
     let scene = parse_text(text).unwrap();
     assert_eq!(scene.geometry.count(PrimKind::Sphere), 2);
-    assert_eq!(scene.geometry.spheres.radius[1], 4.0);
-    assert_eq!(scene.geometry.spheres.centre.get(0), Vec3::new(0., 1.5, 0.));
+    assert_eq!(scene.geometry.spheres.records[1].radius, 4.0);
+    assert_eq!(
+        scene.geometry.spheres.records[0].centre,
+        Vec3::new(0., 1.5, 0.)
+    );
 }
 
 #[test]
 fn numbers_as_printf_g_writes_them() {
     let scene = parse_text("s 1.11022e-16 -0.5 30.0827 1").unwrap();
-    let c = scene.geometry.spheres.centre.get(0);
+    let c = scene.geometry.spheres.records[0].centre;
     assert_eq!((c.x, c.y, c.z), (1.11022e-16, -0.5, 30.0827));
 }
 

@@ -143,9 +143,9 @@ fn camera_ray(scene: &Scene, width: u32, height: u32, x: u32, row: u32) -> (Vec3
 
 fn blocked_by_a_sphere(scene: &Scene, origin: Vec3, target: Vec3) -> bool {
     let s = &scene.geometry.spheres;
-    (0..s.radius.len()).any(|i| {
+    (0..s.records.len()).any(|i| {
         // Distance from the centre to the segment origin-target, against the radius.
-        let (c, r) = (s.centre.get(i), s.radius[i]);
+        let (c, r) = (s.records[i].centre, s.records[i].radius);
         let seg = target - origin;
         let k = ((c - origin).dot(seg) / seg.length_squared()).clamp(0.0, 1.0);
         (origin + k * seg - c).length() < r

@@ -240,9 +240,7 @@ proptest! {
         let centre = Vec3::from(centre);
         let radius = 10f32.powf(log_radius).max(1e-4 * centre.abs().max_element());
         let mut spheres = Spheres::default();
-        spheres.centre.push(centre);
-        spheres.radius.push(radius);
-        spheres.material.push(0);
+        spheres.push(centre, radius, 0);
         let origin = centre + distance * radius * unit(a, b);
         let target = centre + 0.95 * radius * unit(c, d);
         let ray = Ray::new(origin, (target - origin).normalize());

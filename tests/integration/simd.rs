@@ -414,9 +414,7 @@ proptest! {
     ) {
         let mut storage = Spheres::default();
         for (centre, r) in spheres {
-            storage.centre.push(centre);
-            storage.radius.push(r);
-            storage.material.push(0);
+            storage.push(centre, r, 0);
         }
         let options = IntersectOptions {
             sphere_roots: roots,

@@ -11,7 +11,7 @@ const CELLS: [u32; 2] = [2500, 2000];
 const TRIANGLES: usize = 10_000_000;
 
 /// The most heap a triangle may take at the peak of storing, building the default BVH and
-/// rendering (174 measured, BENCHMARKS.md: 74 for the triangle arrays as they grow, 4 for
+/// rendering (174 measured, BENCHMARKS.md: 74 for the triangle records as they grow, 4 for
 /// the primitive order and 64 for the binary nodes' array at the most a tree can take,
 /// counted once more at the 32 the tree uses while the array shrinks to them).
 const MAX_BYTES_PER_TRIANGLE: f64 = 180.0;
@@ -48,7 +48,7 @@ pub fn ten_million_triangles_render_within_the_stated_memory() {
             triangles.push([a, c, d], None, 0);
         }
     }
-    assert_eq!(triangles.material.len(), TRIANGLES);
+    assert_eq!(triangles.records.len(), TRIANGLES);
 
     scene.camera = CameraSpec {
         from: Vec3::new(1250.0, -600.0, 900.0),

@@ -13,7 +13,7 @@ const SPHERES: usize = 10_000_000;
 
 /// The most heap a sphere may take at the peak of storing, building the default BVH and
 /// rendering, as `docs/limits.md` states it (136 measured, BENCHMARKS.md: 34 for the sphere
-/// arrays as they grow, 64 for the binary nodes (two per sphere, as the SAH splits the
+/// records as they grow, 64 for the binary nodes (two per sphere, as the SAH splits the
 /// lattice down to one sphere per leaf), 4 for the primitive order and 34 for the 8-wide
 /// tree being converted from them; the build's items, 28 bytes, are freed before that).
 const MAX_BYTES_PER_SPHERE: f64 = 140.0;
@@ -27,7 +27,7 @@ pub fn ten_million_spheres_render_within_the_stated_memory() {
         Vec3::new(124.6, 99.6, 400.0),
         [64, 48],
     );
-    assert_eq!(scene.geometry.spheres.radius.len(), SPHERES);
+    assert_eq!(scene.geometry.spheres.records.len(), SPHERES);
 
     let report = counting::render_within(&scene, before, SPHERES, "sphere", MAX_BYTES_PER_SPHERE);
 
@@ -71,9 +71,7 @@ pub fn sphere_lattice(name: &str, sides: [u32; 3], from: Vec3, [width, height]: 
     for x in 0..sides[0] {
         for y in 0..sides[1] {
             for z in 0..sides[2] {
-                spheres.centre.push(Vec3::new(x as f32, y as f32, z as f32));
-                spheres.radius.push(0.25);
-                spheres.material.push(0);
+                spheres.push(Vec3::new(x as f32, y as f32, z as f32), 0.25, 0);
             }
         }
     }

@@ -18,7 +18,7 @@ pub fn a_course_render_copies_no_geometry() {
         [32, 24],
     );
     let spheres = &scene.geometry.spheres;
-    let stored = spheres.centre.x.capacity() * 12 + spheres.radius.capacity() * 8;
+    let stored = spheres.records.capacity() * std::mem::size_of::<p3trace::intersect::Sphere>();
     let peak = |profile| {
         let mut options = RenderOptions::from_scene(&scene);
         // The same depth for both, so that only the profile differs.
