@@ -5,10 +5,11 @@
 //! tiles of the region on rayon's threads: one ray at a time, or (the default) as a
 //! stream per tile (`stream.rs`). The stream takes a tile's primary samples by blocks of
 //! 4 x 2 pixels, each pixel's samples in order, so a packet's lanes are eight pixels at
-//! 1 spp and one pixel's samples from 8 spp up. Each pixel sums its samples in one order
-//! whatever the mode, and tiles write their own block of one buffer, so the image is the
-//! same for every mode and thread count. A worker's scratch comes from an arena reset per
-//! tile: a warm tile asks the global allocator for nothing.
+//! 1 spp and one pixel's samples from 8 spp up; their rays are made eight at a time. Each
+//! pixel sums its samples in one order whatever the mode, and tiles write their own block
+//! of one buffer, so the image is the same for every mode and thread count. A worker's
+//! scratch comes from an arena reset per tile: a warm tile asks the global allocator for
+//! nothing.
 
 pub mod camera;
 pub mod film;
@@ -31,9 +32,8 @@ use rayon::prelude::*;
 use crate::accel::{AccelKind, AccelOptions, Tracer};
 use crate::intersect::IntersectOptions;
 use crate::limits::{check_image_size, MAX_SPP_SIDE};
-use crate::ray::Ray;
 use crate::scene::Scene;
-use camera::Camera;
+use camera::{Camera, FilmSample};
 use film::Film;
 use progress::{Meter, Progress};
 use region::Region;
@@ -350,7 +350,7 @@ fn render_tile(
     let jittered = options.sampling != Sampling::Centre;
     // Sample (p, q) of pixel (x, y): the same ray and random numbers in both modes.
     let [open, close] = options.shutter;
-    let sample_ray = |x: u32, y: u32, p: u32, q: u32| {
+    let film_sample = |x: u32, y: u32, p: u32, q: u32| {
         let rng = SampleRng::new(y * options.width + x, q * grid.columns + p, options.seed);
         let (jx, jy) = if jittered {
             (rng.uniform(dim::FILM_X), rng.uniform(dim::FILM_Y))
@@ -374,17 +374,18 @@ fn render_tile(
             cell: [p, q],
             grid,
         };
-        (camera.ray(sx, sy, lens, time), sample)
+        (FilmSample { sx, sy, lens, time }, sample)
     };
     SCRATCH.with_borrow_mut(|arena| {
         arena.reset();
         let sums = arena.alloc_slice_fill_copy((tile.width * tile.height) as usize, Vec3::ZERO);
         trace_tile(
             shader,
+            camera,
             options,
             tile,
             grid,
-            &sample_ray,
+            film_sample,
             arena,
             sums,
             &mut rays,
@@ -403,10 +404,11 @@ fn render_tile(
 #[allow(clippy::too_many_arguments)] // the tile's setting, its scratch and its sums
 fn trace_tile(
     shader: &Shader,
+    camera: &Camera,
     options: &RenderOptions,
     tile: Tile,
     grid: SampleGrid,
-    sample_ray: &dyn Fn(u32, u32, u32, u32) -> (Ray, Sample),
+    film_sample: impl Fn(u32, u32, u32, u32) -> (FilmSample, Sample),
     arena: &Bump,
     sums: &mut [Vec3],
     rays: &mut RayCounts,
@@ -420,7 +422,8 @@ fn trace_tile(
                 );
                 for q in 0..grid.rows {
                     for p in 0..grid.columns {
-                        let (ray, sample) = sample_ray(x, y, p, q);
+                        let (film, sample) = film_sample(x, y, p, q);
+                        let ray = camera.ray(film.sx, film.sy, film.lens, film.time);
                         *sum += shader.trace(&ray, RayKind::Primary, &sample, 1, 1.0, rays);
                     }
                 }
@@ -445,6 +448,15 @@ fn trace_tile(
             // few pixels as it can hold.
             let samples = (tile.width * tile.height * grid.cells()) as usize;
             let mut primary = stream::Queue::with_capacity_in(samples, arena);
+            // Eight samples at a time, their rays made together.
+            let mut batch = [(FilmSample::default(), None, 0); 8];
+            let mut filled = 0;
+            let mut flush = |batch: &[(FilmSample, Option<Sample>, u32); 8], n: usize| {
+                let rays = camera.rays8(&batch.map(|(film, _, _)| film));
+                for (ray, &(_, sample, pixel)) in rays.into_iter().zip(&batch[..n]) {
+                    primary.push_primary(ray, sample.expect("a filled lane"), pixel);
+                }
+            };
             for (bx, by) in blocks {
                 for l in 0..PACKET_WIDTH * PACKET_HEIGHT {
                     let Some((x, y)) = lane_pixel(bx, by, l) else {
@@ -452,12 +464,18 @@ fn trace_tile(
                     };
                     for q in 0..grid.rows {
                         for p in 0..grid.columns {
-                            let (ray, sample) = sample_ray(tile.x + x, tile.y + y, p, q);
-                            primary.push_primary(ray, sample, y * tile.width + x);
+                            let (film, sample) = film_sample(tile.x + x, tile.y + y, p, q);
+                            batch[filled] = (film, Some(sample), y * tile.width + x);
+                            filled += 1;
+                            if filled == 8 {
+                                flush(&batch, 8);
+                                filled = 0;
+                            }
                         }
                     }
                 }
             }
+            flush(&batch, filled);
             stream::trace(shader, arena, primary, sums, rays);
         }
     }

@@ -5,16 +5,18 @@
 //! planes, degenerate triangles, zero radii and random active masks. Inactive lanes and
 //! padding slots must miss.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use p3trace::intersect::{
     self, Aabb, BoxPack8, BoxRay, BoxRay8, Boxes, IntersectOptions, Intervals8, LeafPack, RayQuery,
     RayQuery8, SpherePack8, SphereRoots, Spheres, TriangleHit, TriangleHit8, TrianglePack8,
     Triangles,
 };
 use p3trace::ray::{Ray, RayPacket};
+use p3trace::render::camera::{Camera, FilmSample};
 use p3trace::render::light::{Emitter, LightSample, Receiver, Rectangle};
 use p3trace::render::sampler::{Sample, SampleGrid, SampleRng};
 use p3trace::render::shade::{Phong, Phong8};
+use p3trace::scene::CameraSpec;
 use p3trace::simd::{F32x8, Mask8, Vec3x8};
 use proptest::prelude::*;
 
@@ -600,6 +602,32 @@ proptest! {
         let lanes = intersect::beyond8(F32x8::splat(entry), F32x8::from_array(limits)).bitmask();
         for (k, &limit) in limits.iter().enumerate() {
             prop_assert_eq!(lanes >> k & 1 == 1, intersect::beyond(entry, limit), "lane {}", k);
+        }
+    }
+
+    /// `Camera::rays8` makes each lane's primary ray as `Camera::ray` does, bit for bit
+    /// (any NaN as any other: a degenerate camera's rays are untraceable either way), for
+    /// pinholes and thin lenses, film points on and off the image, random times.
+    #[test]
+    fn camera_rays8_equal_scalar(
+        (from, at, up) in (point(), point(), direction()),
+        (angle, aperture, focal) in (1.0f32..179.0, prop_oneof![Just(0.0f32), 0.0f32..20.0], 0.1f32..10.0),
+        (width, height) in (1u32..2000, 1u32..2000),
+        films in prop::collection::vec(((-10.0f32..2010.0, -10.0f32..2010.0), (-1.0f32..1.0, -1.0f32..1.0), coord()), 8),
+    ) {
+        let spec = CameraSpec { from, at, up, angle, aperture, focal, width, height, ..CameraSpec::default() };
+        let camera = Camera::new(&spec, width, height);
+        let samples: [FilmSample; 8] = std::array::from_fn(|k| {
+            let ((sx, sy), (lx, ly), time) = films[k];
+            FilmSample { sx, sy, lens: Vec2::new(lx, ly), time }
+        });
+        let bits = |r: &Ray| {
+            [r.origin.to_array(), r.dir.to_array(), [r.time; 3]]
+                .map(|v| v.map(|x| if x.is_nan() { f32::NAN.to_bits() } else { x.to_bits() }))
+        };
+        for (k, (ray, s)) in camera.rays8(&samples).iter().zip(&samples).enumerate() {
+            let scalar = camera.ray(s.sx, s.sy, s.lens, s.time);
+            prop_assert_eq!(bits(ray), bits(&scalar), "lane {}: {:?} against {:?}", k, ray, scalar);
         }
     }
 
