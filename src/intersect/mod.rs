@@ -6,8 +6,9 @@
 //! plain `Vec`s, one array per field), except for the kinds that fill BVH leaves: their
 //! SIMD tests read the leaves' packs (eight primitives side by side), so their storage
 //! is read a primitive at a time, by each hit's surface point, and holds a record per
-//! primitive ([`Triangle`], [`Sphere`]) that one or two cache lines bring. [`crate::scene::Geometry`] holds one storage per kind of the list
-//! in [`crate::prim`] and dispatches to them.
+//! primitive ([`Triangle`], [`Sphere`]) that one or two cache lines bring.
+//! [`crate::scene::Geometry`] holds one storage per kind of the list in [`crate::prim`]
+//! and dispatches to them.
 //!
 //! Every routine has the same contract: given a ray with a unit direction and an open
 //! interval `(t_min, t_max)`, return the smallest `t` in the interval at which the ray

@@ -336,7 +336,8 @@ impl Shapes for Spheres {
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {
-        sphere_bounds(self.records[i].centre, self.records[i].radius)
+        let Sphere { centre, radius, .. } = self.records[i];
+        sphere_bounds(centre, radius)
     }
 
     #[inline]
@@ -352,13 +353,8 @@ impl Shapes for Spheres {
     }
 
     fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
-        sphere8(
-            query,
-            self.records[i].centre,
-            self.records[i].radius,
-            t_max,
-            active,
-        )
+        let Sphere { centre, radius, .. } = self.records[i];
+        sphere8(query, centre, radius, t_max, active)
     }
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {
