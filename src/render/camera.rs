@@ -10,7 +10,7 @@ use crate::simd::{F32x8, Vec3x8};
 
 /// Where a primary ray starts from: the film point `(sx, sy)` in pixels, the point of
 /// the unit disk `lens` (for a thin lens), and the time.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FilmSample {
     pub sx: f32,
     pub sy: f32,
@@ -70,7 +70,8 @@ impl Camera {
 
     /// The primary ray through film position `(sx, sy)` in pixel units, `(0, 0)` being the
     /// bottom-left corner. `lens` is a point of the unit disk, used only by a thin lens.
-    pub fn ray(&self, sx: f32, sy: f32, lens: Vec2, time: f32) -> Ray {
+    pub fn ray(&self, film: &FilmSample) -> Ray {
+        let FilmSample { sx, sy, lens, time } = *film;
         let x = self.plane_width * (sx / self.width - 0.5);
         let y = self.plane_height * (sy / self.height - 0.5);
         let mut ray = if self.is_thin_lens() {
@@ -122,6 +123,15 @@ impl Camera {
 mod tests {
     use super::*;
 
+    fn film(sx: f32, sy: f32, lens: Vec2) -> FilmSample {
+        FilmSample {
+            sx,
+            sy,
+            lens,
+            time: 0.0,
+        }
+    }
+
     fn spec() -> CameraSpec {
         CameraSpec {
             from: Vec3::new(0., 0., 10.),
@@ -137,7 +147,7 @@ mod tests {
     #[test]
     fn centre_ray_looks_at_the_target() {
         let cam = Camera::new(&spec(), 200, 100);
-        let r = cam.ray(100.0, 50.0, Vec2::ZERO, 0.0);
+        let r = cam.ray(&film(100.0, 50.0, Vec2::ZERO));
         assert!((r.dir - Vec3::NEG_Z).length() < 1e-6);
         assert_eq!(r.origin, Vec3::new(0., 0., 10.));
     }
@@ -146,10 +156,10 @@ mod tests {
     fn corners_span_the_field_of_view() {
         // 90 degrees vertically at distance 10: the view plane is 20 high and 40 wide.
         let cam = Camera::new(&spec(), 200, 100);
-        let top_right = cam.ray(200.0, 100.0, Vec2::ZERO, 0.0);
+        let top_right = cam.ray(&film(200.0, 100.0, Vec2::ZERO));
         let expected = Vec3::new(20., 10., -10.).normalize();
         assert!((top_right.dir - expected).length() < 1e-6);
-        let bottom_left = cam.ray(0.0, 0.0, Vec2::ZERO, 0.0);
+        let bottom_left = cam.ray(&film(0.0, 0.0, Vec2::ZERO));
         assert!((bottom_left.dir - Vec3::new(-20., -10., -10.).normalize()).length() < 1e-6);
     }
 
@@ -166,7 +176,7 @@ mod tests {
         let points: Vec<Vec3> = [Vec2::ZERO, Vec2::new(1., 0.), Vec2::new(-0.3, 0.8)]
             .iter()
             .map(|&l| {
-                let r = cam.ray(sx, sy, l, 0.0);
+                let r = cam.ray(&film(sx, sy, l));
                 // The focal plane is z = 10 - 1.5 * 10.
                 r.at((-5.0 - r.origin.z) / r.dir.z)
             })
@@ -174,7 +184,7 @@ mod tests {
         assert!((points[0] - points[1]).length() < 1e-4);
         assert!((points[0] - points[2]).length() < 1e-4);
         // The lens is aperture pixel widths wide: 4 * 40 / 200 = 0.8.
-        let edge = cam.ray(sx, sy, Vec2::new(1., 0.), 0.0);
+        let edge = cam.ray(&film(sx, sy, Vec2::new(1., 0.)));
         assert!((edge.origin - Vec3::new(0.8, 0., 10.)).length() < 1e-5);
     }
 
@@ -186,7 +196,7 @@ mod tests {
             ..spec()
         };
         for (width, height) in [(200, 100), (25, 13), (1600, 800), (100, 100)] {
-            let edge = Camera::new(&s, width, height).ray(3.0, 2.0, Vec2::new(1., 0.), 0.0);
+            let edge = Camera::new(&s, width, height).ray(&film(3.0, 2.0, Vec2::new(1., 0.)));
             assert!(
                 (edge.origin - Vec3::new(0.8, 0., 10.)).length() < 1e-5,
                 "{width}x{height}"

@@ -25,6 +25,7 @@ mod stream;
 use std::cell::RefCell;
 use std::time::{Duration, Instant};
 
+use bumpalo::collections::Vec as ArenaVec;
 use bumpalo::Bump;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -423,7 +424,7 @@ fn trace_tile(
                 for q in 0..grid.rows {
                     for p in 0..grid.columns {
                         let (film, sample) = film_sample(x, y, p, q);
-                        let ray = camera.ray(film.sx, film.sy, film.lens, film.time);
+                        let ray = camera.ray(&film);
                         *sum += shader.trace(&ray, RayKind::Primary, &sample, 1, 1.0, rays);
                     }
                 }
@@ -447,16 +448,7 @@ fn trace_tile(
             // with its samples in their order, so that a packet's rays leave through as
             // few pixels as it can hold.
             let samples = (tile.width * tile.height * grid.cells()) as usize;
-            let mut primary = stream::Queue::with_capacity_in(samples, arena);
-            // Eight samples at a time, their rays made together.
-            let mut batch = [(FilmSample::default(), None, 0); 8];
-            let mut filled = 0;
-            let mut flush = |batch: &[(FilmSample, Option<Sample>, u32); 8], n: usize| {
-                let rays = camera.rays8(&batch.map(|(film, _, _)| film));
-                for (ray, &(_, sample, pixel)) in rays.into_iter().zip(&batch[..n]) {
-                    primary.push_primary(ray, sample.expect("a filled lane"), pixel);
-                }
-            };
+            let mut gathered = ArenaVec::with_capacity_in(samples, arena);
             for (bx, by) in blocks {
                 for l in 0..PACKET_WIDTH * PACKET_HEIGHT {
                     let Some((x, y)) = lane_pixel(bx, by, l) else {
@@ -465,17 +457,19 @@ fn trace_tile(
                     for q in 0..grid.rows {
                         for p in 0..grid.columns {
                             let (film, sample) = film_sample(tile.x + x, tile.y + y, p, q);
-                            batch[filled] = (film, Some(sample), y * tile.width + x);
-                            filled += 1;
-                            if filled == 8 {
-                                flush(&batch, 8);
-                                filled = 0;
-                            }
+                            gathered.push((film, sample, y * tile.width + x));
                         }
                     }
                 }
             }
-            flush(&batch, filled);
+            // Their rays eight at a time; a short last chunk repeats its first sample.
+            let mut primary = stream::Queue::with_capacity_in(samples, arena);
+            for chunk in gathered.chunks(8) {
+                let films = std::array::from_fn(|k| chunk.get(k).unwrap_or(&chunk[0]).0);
+                for (ray, &(_, sample, pixel)) in camera.rays8(&films).into_iter().zip(chunk) {
+                    primary.push_primary(ray, sample, pixel);
+                }
+            }
             stream::trace(shader, arena, primary, sums, rays);
         }
     }

@@ -626,7 +626,7 @@ proptest! {
                 .map(|v| v.map(|x| if x.is_nan() { f32::NAN.to_bits() } else { x.to_bits() }))
         };
         for (k, (ray, s)) in camera.rays8(&samples).iter().zip(&samples).enumerate() {
-            let scalar = camera.ray(s.sx, s.sy, s.lens, s.time);
+            let scalar = camera.ray(s);
             prop_assert_eq!(bits(ray), bits(&scalar), "lane {}: {:?} against {:?}", k, ray, scalar);
         }
     }
