@@ -362,6 +362,7 @@ impl Shapes for Spheres {
         ((p - centre) / radius).normalize_or_zero()
     }
 
+    #[inline]
     fn surface_point(&self, i: usize, ray: &Ray, t: f32, _u: f32, _v: f32) -> SurfacePoint {
         let Sphere { centre, radius, .. } = self.records[i];
         sphere_surface_point(centre, radius, ray, t)

@@ -524,6 +524,7 @@ impl Shapes for Triangles {
     /// `e2 . ((o - p0) x e1)` has the wrong sign; that product is off by `gamma(5)` of
     /// `|o - p0| |e1| |e2|`, which is `|o - p0| / sin(angle between e1 and e2)` along the
     /// normal, so a sliver's bound grows with its skew.
+    #[inline]
     fn surface_point(&self, i: usize, _ray: &Ray, _t: f32, u: f32, v: f32) -> SurfacePoint {
         let Triangle {
             p0,

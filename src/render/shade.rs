@@ -336,6 +336,7 @@ impl<'a> Shader<'a> {
 
     /// [`Shader::surface`] but for `outward`, left at the point: the stream renderer
     /// offsets eight points at a time ([`crate::intersect::spawn_origin8`]).
+    #[inline(always)]
     pub(super) fn hit_point(&self, ray: &Ray, hit: &Hit) -> Surface {
         let geometry = &self.tracer.geometry;
         let (p, normal, error) = match self.options.profile {

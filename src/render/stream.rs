@@ -254,6 +254,10 @@ struct HitBlocks<'a> {
     blocks: ArenaVec<'a, HitBlock>,
     /// The lanes of the last block filled.
     filled: usize,
+    /// The last block's `inside` and `bounded` masks, kept here while it fills: set in
+    /// the block lane by lane, each would be read back from a line still being written.
+    inside: u8,
+    bounded: u8,
 }
 
 impl<'a> HitBlocks<'a> {
@@ -274,6 +278,8 @@ impl<'a> HitBlocks<'a> {
         HitBlocks {
             blocks: ArenaVec::with_capacity_in(hits.div_ceil(8), arena),
             filled: 8,
+            inside: 0,
+            bounded: 0,
         }
     }
 
@@ -281,15 +287,15 @@ impl<'a> HitBlocks<'a> {
     /// `dir`, on material `material`.
     fn push(&mut self, ray: u32, surface: &Surface, dir: Vec3, material: u32) {
         if self.filled == 8 {
+            self.close();
             self.blocks.push(Self::EMPTY);
             self.filled = 0;
         }
         let k = self.filled;
         let block = self.blocks.last_mut().expect("a block is open");
-        block.lanes |= 1 << k;
-        block.inside |= u8::from(surface.inside) << k;
+        self.inside |= u8::from(surface.inside) << k;
         if let Some(error) = surface.error {
-            block.bounded |= 1 << k;
+            self.bounded |= 1 << k;
             block.error.set_lane(k, error);
         }
         block.ray[k] = ray;
@@ -298,13 +304,23 @@ impl<'a> HitBlocks<'a> {
         block.nf.set_lane(k, surface.nf);
         block.dir.set_lane(k, dir);
         self.filled += 1;
-        if self.filled == 8 {
-            block.offset();
-        }
     }
 
-    /// The blocks, the last one's free lanes repeating its lane 0 and offset.
+    /// Writes the last block's masks.
+    fn close(&mut self) {
+        if let Some(block) = self.blocks.last_mut() {
+            block.lanes = ((1u16 << self.filled) - 1) as u8;
+            block.inside = self.inside;
+            block.bounded = self.bounded;
+        }
+        (self.inside, self.bounded) = (0, 0);
+    }
+
+    /// The blocks, the last one's free lanes repeating its lane 0, each offset. The
+    /// offsets come last: a block's just-written lanes would not forward to its vector
+    /// loads.
     fn finish(mut self) -> ArenaVec<'a, HitBlock> {
+        self.close();
         let n = self.filled;
         if let Some(block) = self.blocks.last_mut() {
             for k in n..8 {
@@ -319,9 +335,9 @@ impl<'a> HitBlocks<'a> {
                     v.set_lane(k, v.lane(0));
                 }
             }
-            if n < 8 {
-                block.offset();
-            }
+        }
+        for block in self.blocks.iter_mut() {
+            block.offset();
         }
         self.blocks
     }

@@ -87,6 +87,7 @@ macro_rules! define_geometry {
             /// The hit of `prim` at `t` along `ray` (barycentrics `u`, `v`) recomputed on its
             /// surface, with its error bound and normal: where spawned rays start from
             /// ([`crate::intersect::spawn_origin`]).
+            #[inline(always)]
             pub fn surface_point(
                 &self,
                 prim: PrimId,
