@@ -88,10 +88,15 @@ impl Camera {
         ray
     }
 
-    /// [`Camera::ray`] of eight film samples, computed eight lanes at a time in its
-    /// order of operations: each ray is the scalar one bit for bit.
-    pub fn rays8(&self, samples: &[FilmSample; 8]) -> [Ray; 8] {
-        let lanes = |f: fn(&FilmSample) -> f32| F32x8::from_array(samples.each_ref().map(f));
+    /// [`Camera::ray`] of the eight film samples `sample(0..8)`, computed eight lanes at a
+    /// time in its order of operations: each ray is the scalar one bit for bit. The
+    /// samples are read where they lie and the rays taken lane by lane: arrays of either
+    /// built on the stack are read back before their stores can forward.
+    #[inline]
+    pub fn rays8<'s>(&self, sample: impl Fn(usize) -> &'s FilmSample) -> CameraRays8 {
+        let lanes = |f: fn(&FilmSample) -> f32| {
+            F32x8::from_array(std::array::from_fn(|k| f(sample(k))))
+        };
         let (sx, sy) = (lanes(|s| s.sx), lanes(|s| s.sy));
         let splat = F32x8::splat;
         let half = splat(0.5);
@@ -110,12 +115,30 @@ impl Camera {
             let depth = Vec3x8::splat(self.n * self.plane_distance);
             (Vec3x8::splat(self.eye), u.scale(x) + v.scale(y) - depth)
         };
-        let dir = dir.normalize();
-        std::array::from_fn(|k| Ray {
-            origin: origin.lane(k),
-            dir: dir.lane(k),
-            time: samples[k].time,
-        })
+        CameraRays8 {
+            origin,
+            dir: dir.normalize(),
+            time: lanes(|s| s.time),
+        }
+    }
+}
+
+/// Eight camera rays as structure of arrays ([`Camera::rays8`]).
+pub struct CameraRays8 {
+    origin: Vec3x8,
+    dir: Vec3x8,
+    time: F32x8,
+}
+
+impl CameraRays8 {
+    /// Lane `k`'s ray.
+    #[inline]
+    pub fn ray(&self, k: usize) -> Ray {
+        Ray {
+            origin: self.origin.lane(k),
+            dir: self.dir.lane(k),
+            time: self.time.lane(k),
+        }
     }
 }
 

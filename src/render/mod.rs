@@ -465,9 +465,10 @@ fn trace_tile(
             // Their rays eight at a time; a short last chunk repeats its first sample.
             let mut primary = stream::Queue::with_capacity_in(samples, arena);
             for chunk in gathered.chunks(8) {
-                let films = std::array::from_fn(|k| chunk.get(k).unwrap_or(&chunk[0]).0);
-                for (ray, &(_, sample, pixel)) in camera.rays8(&films).into_iter().zip(chunk) {
-                    primary.push_primary(ray, sample, pixel);
+                let film = |k: usize| &chunk.get(k).unwrap_or(&chunk[0]).0;
+                let rays = camera.rays8(film);
+                for (k, &(_, sample, pixel)) in chunk.iter().enumerate() {
+                    primary.push_primary(rays.ray(k), sample, pixel);
                 }
             }
             stream::trace(shader, arena, primary, sums, rays);
