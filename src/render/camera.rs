@@ -94,9 +94,8 @@ impl Camera {
     /// built on the stack are read back before their stores can forward.
     #[inline]
     pub fn rays8<'s>(&self, sample: impl Fn(usize) -> &'s FilmSample) -> CameraRays8 {
-        let lanes = |f: fn(&FilmSample) -> f32| {
-            F32x8::from_array(std::array::from_fn(|k| f(sample(k))))
-        };
+        let lanes =
+            |f: fn(&FilmSample) -> f32| F32x8::from_array(std::array::from_fn(|k| f(sample(k))));
         let (sx, sy) = (lanes(|s| s.sx), lanes(|s| s.sy));
         let splat = F32x8::splat;
         let half = splat(0.5);
