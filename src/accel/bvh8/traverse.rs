@@ -89,8 +89,8 @@ impl Bvh8 {
     ) -> bool {
         let (t_min, box_ray) = (query.t_min, BoxRay::new(query.ray.origin, query.inv_dir));
         let mut stack = Stack::<ChildRef, STACK_SIZE>::new();
-        stack.push(start);
-        while let Some(child) = stack.pop() {
+        let mut next = Some(start);
+        while let Some(child) = next.take().or_else(|| stack.pop()) {
             if child & LEAF != 0 {
                 if self.blocks(geometry, child, query, t_max) {
                     return true;
@@ -99,7 +99,12 @@ impl Bvh8 {
             }
             let node = &self.nodes[child as usize];
             let (hits, _) = node.entries(&box_ray, t_min, t_max);
-            for_lanes(hits, |k| stack.push(node.child[k]));
+            if hits != 0 {
+                // The last child pushed is the one popped next: it skips the stack.
+                let last = 7 - hits.leading_zeros() as usize;
+                for_lanes(hits & !(1 << last), |k| stack.push(node.child[k]));
+                next = Some(node.child[last]);
+            }
         }
         false
     }
