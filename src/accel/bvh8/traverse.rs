@@ -101,7 +101,7 @@ impl Bvh8 {
             let (hits, _) = node.entries(&box_ray, t_min, t_max);
             if hits != 0 {
                 // The last child pushed is the one popped next: it skips the stack.
-                let last = 7 - hits.leading_zeros() as usize;
+                let last = hits.ilog2() as usize;
                 for_lanes(hits & !(1 << last), |k| stack.push(node.child[k]));
                 next = Some(node.child[last]);
             }
