@@ -74,6 +74,15 @@ impl<'a> Queue<'a> {
         self.rays.len()
     }
 
+    /// Queues the rays of `other` (not yet traced) after its own.
+    fn append(&mut self, other: &Queue) {
+        self.rays.extend_from_slice(&other.rays);
+        self.samples.extend_from_slice(&other.samples);
+        self.ior.extend_from_slice(&other.ior);
+        self.parent.extend_from_slice(&other.parent);
+        self.weight.extend_from_slice(&other.weight);
+    }
+
     /// Ray `i`'s colour as its parent takes it.
     fn seen(&self, i: usize) -> Vec3 {
         if self.hit[i] {
@@ -177,9 +186,14 @@ fn shade_depth<'a>(
         });
     }
 
-    // A hit spawns a reflected and a transmitted ray at most.
+    // A hit spawns a reflected and a transmitted ray at most. The reflected rays come
+    // first and the transmitted ones after them, as Embree's stream renderer orders them:
+    // a packet then holds rays that leave a surface on one side (a glass sphere's
+    // reflections outside it, its refractions inside), and each parent still receives
+    // its reflected colour before its transmitted one, the scalar order of its sum.
     let mut next = Queue::with_capacity_in(2 * n, arena);
     if depth < shader.options.max_depth {
+        let mut transmitted = Queue::with_capacity_in(n, arena);
         for block in &blocks {
             for_lanes(block.lanes, |k| {
                 let i = block.ray[k] as usize;
@@ -188,10 +202,15 @@ fn shade_depth<'a>(
                 let (ray, sample) = (&queue.rays[i], &queue.samples[i]);
                 shader.spawn(ray, sample, &surface, material, queue.ior[i], |child| {
                     rays.add(child.kind, 1);
-                    next.push(child.ray, child.sample, child.ior, i as u32, child.weight);
+                    let queue = match child.kind {
+                        RayKind::Refraction => &mut transmitted,
+                        _ => &mut next,
+                    };
+                    queue.push(child.ray, child.sample, child.ior, i as u32, child.weight);
                 });
             });
         }
+        next.append(&transmitted);
     }
     next
 }
