@@ -495,6 +495,19 @@ impl Vec3x8 {
     }
 }
 
+impl Neg for Vec3x8 {
+    type Output = Vec3x8;
+    /// Flips each component's sign bit, as glam's `-v`.
+    #[inline]
+    fn neg(self) -> Self {
+        Vec3x8 {
+            x: -self.x,
+            y: -self.y,
+            z: -self.z,
+        }
+    }
+}
+
 impl Add for Vec3x8 {
     type Output = Vec3x8;
     #[inline]

@@ -8,7 +8,8 @@
 //! stream renderer (`stream.rs`) compute the same colours: Blinn-Phong over the lights
 //! given each one's shadow ray and answer ([`Phong::light`], which the stream renderer
 //! computes for eight hits at a time with its twin [`Phong8::light`]), and `spawn`, which
-//! hands on the reflected ray and then the transmitted one with their weights. Spawned
+//! hands on the reflected ray and then the transmitted one with their weights (their
+//! directions and weights from [`Bounce`], eight hits at a time [`Bounce8`]). Spawned
 //! rays start from the hit recomputed on the surface, offset by its error bound
 //! ([`crate::intersect::SurfacePoint`]); the `course` profile offsets by [`EPS`] instead.
 //! Fuzzy reflection tilts every mirror direction, glass's Fresnel reflection and total
@@ -273,56 +274,40 @@ impl<'a> Shader<'a> {
         mut emit: impl FnMut(Spawned),
     ) {
         let Surface { nf, inside, .. } = *surface;
-        let reflected = |weight: Vec3| {
-            let mirror = (ray.dir - 2.0 * ray.dir.dot(nf) * nf).normalize();
+        let bounce = Bounce::new(
+            ray.dir,
+            nf,
+            inside,
+            ior_here,
+            material,
+            self.options.schlick,
+        );
+        if let Some((mirror, weight)) = bounce.reflected {
             let sample = sample.spawn(0);
-            let ray = Ray {
-                origin: surface.outward,
-                dir: self.fuzz(mirror, nf, &sample.rng),
-                time: ray.time,
-            };
-            Spawned {
-                ray,
+            emit(Spawned {
+                ray: Ray {
+                    origin: surface.outward,
+                    dir: self.fuzz(mirror, nf, &sample.rng),
+                    time: ray.time,
+                },
                 kind: RayKind::Reflection,
                 sample,
                 ior: ior_here,
                 weight,
-            }
-        };
-        if material.transmittance > 0.0 {
-            let ior_next = if inside { 1.0 } else { material.ior };
-            let eta = ior_here / ior_next;
-            let cos_i = -ray.dir.dot(nf);
-            let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
-            if sin2_t > 1.0 {
-                // Total internal reflection: Kr = 1 and no transmitted ray.
-                emit(reflected(material.specular));
-                return;
-            }
-            let cos_t = (1.0 - sin2_t).sqrt();
-            let kr = if self.options.schlick {
-                schlick(ior_here, ior_next, cos_i, cos_t)
-            } else {
-                fresnel(ior_here, ior_next, cos_i, cos_t)
-            };
-            if kr > 0.0 {
-                emit(reflected(kr * material.specular));
-            }
-            if kr < 1.0 {
-                emit(Spawned {
-                    ray: Ray {
-                        origin: surface.origin(-nf),
-                        dir: (eta * ray.dir + (eta * cos_i - cos_t) * nf).normalize(),
-                        time: ray.time,
-                    },
-                    kind: RayKind::Refraction,
-                    sample: sample.spawn(1),
-                    ior: ior_next,
-                    weight: (1.0 - kr) * material.diffuse,
-                });
-            }
-        } else if material.ks > 0.0 {
-            emit(reflected(material.ks * material.specular));
+            });
+        }
+        if let Some((dir, weight, ior_next)) = bounce.transmitted {
+            emit(Spawned {
+                ray: Ray {
+                    origin: surface.origin(-nf),
+                    dir,
+                    time: ray.time,
+                },
+                kind: RayKind::Refraction,
+                sample: sample.spawn(1),
+                ior: ior_next,
+                weight,
+            });
         }
     }
 
@@ -368,7 +353,7 @@ impl<'a> Shader<'a> {
     /// A reflected direction: the `mirror` direction, or with roughness g > 0 the
     /// direction of `mirror + g q` for `q` uniform in the unit ball, unless that one
     /// points below the surface of normal `nf` (P3F.md 6.4).
-    fn fuzz(&self, mirror: Vec3, nf: Vec3, rng: &SampleRng) -> Vec3 {
+    pub(super) fn fuzz(&self, mirror: Vec3, nf: Vec3, rng: &SampleRng) -> Vec3 {
         let g = self.options.roughness;
         if g == 0.0 {
             return mirror;
@@ -573,6 +558,197 @@ impl Phong8 {
         let specular = self.specular.scale(power);
         Vec3x8::splat(colour) * (diffuse + specular)
     }
+}
+
+/// The rays a hit spawns, as directions and weights before their origins and fuzz: the
+/// mirror direction of a reflective material (weight `ks Cs`); for a transmissive one the
+/// Fresnel (or Schlick) split into a reflected ray (`Kr Cs`, or `Cs` at total internal
+/// reflection) and a transmitted one (`(1 - Kr) Cd`, into the medium of index `ior_next`),
+/// each only where its weight is not zero. [`Bounce8`] is its eight-lane twin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounce {
+    /// The mirror direction and the reflected ray's weight.
+    pub reflected: Option<(Vec3, Vec3)>,
+    /// The transmitted ray's direction, its weight and the index of its medium.
+    pub transmitted: Option<(Vec3, Vec3, f32)>,
+}
+
+impl Bounce {
+    /// The rays spawned where a ray of direction `dir`, in a medium of index `ior_here`,
+    /// meets `material` with the normal `nf` facing it, from `inside` the surface or not.
+    #[inline(always)]
+    pub fn new(
+        dir: Vec3,
+        nf: Vec3,
+        inside: bool,
+        ior_here: f32,
+        material: &Material,
+        schlick: bool,
+    ) -> Self {
+        let mirror = || (dir - 2.0 * dir.dot(nf) * nf).normalize();
+        let mut bounce = Bounce {
+            reflected: None,
+            transmitted: None,
+        };
+        if material.transmittance > 0.0 {
+            let ior_next = if inside { 1.0 } else { material.ior };
+            let eta = ior_here / ior_next;
+            let cos_i = -dir.dot(nf);
+            let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+            if sin2_t > 1.0 {
+                // Total internal reflection: Kr = 1 and no transmitted ray.
+                bounce.reflected = Some((mirror(), material.specular));
+                return bounce;
+            }
+            let cos_t = (1.0 - sin2_t).sqrt();
+            let kr = if schlick {
+                self::schlick(ior_here, ior_next, cos_i, cos_t)
+            } else {
+                fresnel(ior_here, ior_next, cos_i, cos_t)
+            };
+            if kr > 0.0 {
+                bounce.reflected = Some((mirror(), kr * material.specular));
+            }
+            if kr < 1.0 {
+                let refracted = (eta * dir + (eta * cos_i - cos_t) * nf).normalize();
+                bounce.transmitted = Some((refracted, (1.0 - kr) * material.diffuse, ior_next));
+            }
+        } else if material.ks > 0.0 {
+            bounce.reflected = Some((mirror(), material.ks * material.specular));
+        }
+        bounce
+    }
+}
+
+/// Eight hits' materials as [`Bounce8`] reads them, lane `k` from the `k`-th.
+#[derive(Clone, Copy, Debug)]
+pub struct Optics8 {
+    transmissive: Mask8,
+    reflective: Mask8,
+    ior: F32x8,
+    diffuse: Vec3x8,
+    specular: Vec3x8,
+    ks: F32x8,
+}
+
+impl Optics8 {
+    /// The materials of `lanes`, splat when every lane has the same one.
+    #[inline]
+    pub fn new(lanes: [&Material; 8]) -> Self {
+        let material = |m: &Material| Optics8 {
+            transmissive: F32x8::splat(m.transmittance).gt(F32x8::ZERO),
+            reflective: F32x8::splat(m.ks).gt(F32x8::ZERO),
+            ior: F32x8::splat(m.ior),
+            diffuse: Vec3x8::splat(m.diffuse),
+            specular: Vec3x8::splat(m.specular),
+            ks: F32x8::splat(m.ks),
+        };
+        if lanes.iter().all(|&m| std::ptr::eq(m, lanes[0])) {
+            return material(lanes[0]);
+        }
+        let each = |f: fn(&Material) -> f32| F32x8::from_array(lanes.map(f));
+        Optics8 {
+            transmissive: each(|m| m.transmittance).gt(F32x8::ZERO),
+            reflective: each(|m| m.ks).gt(F32x8::ZERO),
+            ior: each(|m| m.ior),
+            diffuse: Vec3x8::from_lanes(lanes.map(|m| m.diffuse)),
+            specular: Vec3x8::from_lanes(lanes.map(|m| m.specular)),
+            ks: each(|m| m.ks),
+        }
+    }
+
+    /// Whether no lane's material spawns a ray (opaque, with no mirror term).
+    #[inline]
+    pub fn spawns_none(&self) -> bool {
+        (self.transmissive | self.reflective).none()
+    }
+}
+
+/// [`Bounce`] for eight hits: lane `k` spawns a reflected ray where `reflected` has it,
+/// along `mirror` with `reflected_weight`, and a transmitted one where `transmitted` has
+/// it, along `refracted` with `transmitted_weight` into the medium `ior_next`; each bit for
+/// bit as [`Bounce::new`] (the other lanes' values are meaningless).
+#[derive(Clone, Copy, Debug)]
+pub struct Bounce8 {
+    pub reflected: Mask8,
+    pub mirror: Vec3x8,
+    pub reflected_weight: Vec3x8,
+    pub transmitted: Mask8,
+    pub refracted: Vec3x8,
+    pub transmitted_weight: Vec3x8,
+    pub ior_next: F32x8,
+}
+
+impl Bounce8 {
+    /// [`Bounce::new`] lane by lane, in its operations and their order.
+    #[inline(always)]
+    pub fn new(
+        dir: Vec3x8,
+        nf: Vec3x8,
+        inside: Mask8,
+        ior_here: F32x8,
+        optics: &Optics8,
+        schlick: bool,
+    ) -> Self {
+        let (zero, one) = (F32x8::ZERO, F32x8::splat(1.0));
+        let dir_nf = dir.dot(nf);
+        let mirror = (dir - nf.scale(F32x8::splat(2.0) * dir_nf)).normalize();
+        let opaque_weight = optics.specular.scale(optics.ks);
+        let glass = optics.transmissive;
+        if glass.none() {
+            return Bounce8 {
+                reflected: optics.reflective,
+                mirror,
+                reflected_weight: opaque_weight,
+                transmitted: Mask8::NONE,
+                refracted: Vec3x8::ZERO,
+                transmitted_weight: Vec3x8::ZERO,
+                ior_next: one,
+            };
+        }
+        let ior_next = inside.select(one, optics.ior);
+        let eta = ior_here / ior_next;
+        let cos_i = -dir_nf;
+        let sin2_t = eta * eta * (one - cos_i * cos_i);
+        let total = sin2_t.gt(one);
+        let cos_t = (one - sin2_t).sqrt();
+        let kr = if schlick {
+            schlick8(ior_here, ior_next, cos_i, cos_t)
+        } else {
+            fresnel8(ior_here, ior_next, cos_i, cos_t)
+        };
+        let split_weight = total.select_vec(optics.specular, optics.specular.scale(kr));
+        let refracted = (dir.scale(eta) + nf.scale(eta * cos_i - cos_t)).normalize();
+        Bounce8 {
+            reflected: (glass & (total | kr.gt(zero))) | optics.reflective.and_not(glass),
+            mirror,
+            reflected_weight: glass.select_vec(split_weight, opaque_weight),
+            transmitted: glass.and_not(total) & kr.lt(one),
+            refracted,
+            transmitted_weight: optics.diffuse.scale(one - kr),
+            ior_next,
+        }
+    }
+}
+
+/// [`fresnel`] lane by lane.
+#[inline(always)]
+fn fresnel8(n1: F32x8, n2: F32x8, cos_i: F32x8, cos_t: F32x8) -> F32x8 {
+    let r_perp = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
+    let r_par = (n1 * cos_t - n2 * cos_i) / (n1 * cos_t + n2 * cos_i);
+    (r_perp * r_perp + r_par * r_par) / F32x8::splat(2.0)
+}
+
+/// [`schlick`] lane by lane (`powi(5)` as the compiler expands it: `x (x^2)^2`).
+#[inline(always)]
+fn schlick8(n1: F32x8, n2: F32x8, cos_i: F32x8, cos_t: F32x8) -> F32x8 {
+    let one = F32x8::splat(1.0);
+    let r = (n1 - n2) / (n1 + n2);
+    let r0 = r * r;
+    let c = n1.le(n2).select(cos_i, cos_t);
+    let x = one - c;
+    let x2 = x * x;
+    r0 + (one - r0) * (x * (x2 * x2))
 }
 
 /// Reflectance from the exact Fresnel equations: the mean of the two polarisations.

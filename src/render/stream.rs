@@ -5,12 +5,13 @@
 //! and the rays they spawn make the next depth's queue. A depth's hits are gathered eight
 //! to a [`HitBlock`] (structure of arrays, filled lane by lane in place), whose points
 //! are offset off the surface ([`spawn_origin8`]), whose shadow rays are set up
-//! ([`crate::render::light::Emitter::sample8`]) and whose Blinn-Phong sums are taken
-//! ([`super::shade::Phong8`]) eight lanes at a time, light by light in the scalar
-//! order, bit for bit as the scalar path. Once the deepest queue is
-//! shaded, colours flow back up: each ray's colour, clamped if it hit something, is
-//! added to its parent's with its weight, in the order the scalar [`Shader::trace`] adds
-//! them, so the image is the scalar one byte for byte.
+//! ([`crate::render::light::Emitter::sample8`]), whose Blinn-Phong sums are taken
+//! ([`super::shade::Phong8`]) and whose reflected and transmitted rays are made
+//! ([`Bounce8`]) eight lanes at a time, light by light in the scalar order, bit for bit
+//! as the scalar path. A depth queues its reflected rays, then its transmitted ones. Once
+//! the deepest queue is shaded, colours flow back up: each ray's colour, clamped if it
+//! hit something, is added to its parent's with its weight, in the order the scalar
+//! [`Shader::trace`] adds them, so the image is the scalar one byte for byte.
 
 use bumpalo::collections::Vec as ArenaVec;
 use bumpalo::Bump;
@@ -18,7 +19,7 @@ use glam::Vec3;
 
 use super::light::Receiver;
 use super::sampler::Sample;
-use super::shade::{Phong8, RayCounts, RayKind, Shader, Surface, EPS};
+use super::shade::{Bounce8, Optics8, Phong8, RayCounts, RayKind, Shader, Surface, EPS};
 use crate::accel::stream::{self, Occlusions, Query};
 use crate::intersect::spawn_origin8;
 use crate::ray::Ray;
@@ -186,30 +187,53 @@ fn shade_depth<'a>(
         });
     }
 
-    // A hit spawns a reflected and a transmitted ray at most. The reflected rays come
-    // first and the transmitted ones after them, as Embree's stream renderer orders them:
-    // a packet then holds rays that leave a surface on one side (a glass sphere's
-    // reflections outside it, its refractions inside), and each parent still receives
-    // its reflected colour before its transmitted one, the scalar order of its sum.
+    // A hit spawns a reflected and a transmitted ray at most, computed eight hits at a
+    // time ([`Bounce8`]). The reflected rays come first and the transmitted ones after
+    // them, as Embree's stream renderer orders them: a packet then holds rays that leave
+    // a surface on one side (a glass sphere's reflections outside it, its refractions
+    // inside), and each parent still receives its reflected colour before its
+    // transmitted one, the scalar order of its sum.
     let mut next = Queue::with_capacity_in(2 * n, arena);
     if depth < shader.options.max_depth {
         let mut transmitted = Queue::with_capacity_in(n, arena);
         for block in &blocks {
-            for_lanes(block.lanes, |k| {
+            let optics = Optics8::new(block.material.map(|m| &shader.scene.materials[m as usize]));
+            if optics.spawns_none() {
+                continue;
+            }
+            let ior_here = F32x8::from_array(block.ray.map(|i| queue.ior[i as usize]));
+            let inside = Mask8::from_bitmask(block.inside);
+            let schlick = shader.options.schlick;
+            let bounce = Bounce8::new(block.dir, block.nf, inside, ior_here, &optics, schlick);
+            for_lanes(bounce.reflected.bitmask() & block.lanes, |k| {
                 let i = block.ray[k] as usize;
-                let material = &shader.scene.materials[block.material[k] as usize];
-                let surface = block.surface(k);
-                let (ray, sample) = (&queue.rays[i], &queue.samples[i]);
-                shader.spawn(ray, sample, &surface, material, queue.ior[i], |child| {
-                    rays.add(child.kind, 1);
-                    let queue = match child.kind {
-                        RayKind::Refraction => &mut transmitted,
-                        _ => &mut next,
-                    };
-                    queue.push(child.ray, child.sample, child.ior, i as u32, child.weight);
-                });
+                let sample = queue.samples[i].spawn(0);
+                let ray = Ray {
+                    origin: block.origin.lane(k),
+                    dir: shader.fuzz(bounce.mirror.lane(k), block.nf.lane(k), &sample.rng),
+                    time: queue.rays[i].time,
+                };
+                let weight = bounce.reflected_weight.lane(k);
+                next.push(ray, sample, queue.ior[i], i as u32, weight);
             });
+            let through = bounce.transmitted.bitmask() & block.lanes;
+            if through != 0 {
+                let origin = block.offset(-block.nf);
+                for_lanes(through, |k| {
+                    let i = block.ray[k] as usize;
+                    let ray = Ray {
+                        origin: origin.lane(k),
+                        dir: bounce.refracted.lane(k),
+                        time: queue.rays[i].time,
+                    };
+                    let (weight, ior) =
+                        (bounce.transmitted_weight.lane(k), bounce.ior_next.lane(k));
+                    transmitted.push(ray, queue.samples[i].spawn(1), ior, i as u32, weight);
+                });
+            }
         }
+        rays.add(RayKind::Reflection, next.len() as u64);
+        rays.add(RayKind::Refraction, transmitted.len() as u64);
         next.append(&transmitted);
     }
     next
@@ -239,29 +263,20 @@ struct HitBlock {
 }
 
 impl HitBlock {
-    /// Sets `origin`, as `Surface::origin` along the facing normal: by the error bound
-    /// ([`spawn_origin8`]), or with the `course` profile by [`EPS`].
+    /// The points offset towards `side` (a unit vector per lane), as `Surface::origin`
+    /// offsets them: by the error bound ([`spawn_origin8`]), or with the `course` profile
+    /// by [`EPS`]. Shadow and reflected rays start on the side of the facing normal
+    /// (`origin`), transmitted rays on the other.
     ///
     /// A profile offsets every hit one way, so only a block's padding lanes mix the two:
     /// the way no lane takes is not computed.
-    fn offset(&mut self) {
-        let by_eps = || self.point + self.nf.scale(F32x8::splat(EPS));
-        self.origin = match self.bounded {
+    fn offset(&self, side: Vec3x8) -> Vec3x8 {
+        let by_eps = || self.point + side.scale(F32x8::splat(EPS));
+        match self.bounded {
             0 => by_eps(),
-            0xFF => spawn_origin8(self.point, self.error, self.nf),
+            0xFF => spawn_origin8(self.point, self.error, side),
             bounded => Mask8::from_bitmask(bounded)
-                .select_vec(spawn_origin8(self.point, self.error, self.nf), by_eps()),
-        };
-    }
-
-    /// Lane `k`'s hit as the scalar shader describes it.
-    fn surface(&self, k: usize) -> Surface {
-        Surface {
-            p: self.point.lane(k),
-            nf: self.nf.lane(k),
-            inside: self.inside >> k & 1 == 1,
-            error: (self.bounded >> k & 1 == 1).then(|| self.error.lane(k)),
-            outward: self.origin.lane(k),
+                .select_vec(spawn_origin8(self.point, self.error, side), by_eps()),
         }
     }
 }
@@ -356,7 +371,7 @@ impl<'a> HitBlocks<'a> {
             }
         }
         for block in self.blocks.iter_mut() {
-            block.offset();
+            block.origin = block.offset(block.nf);
         }
         self.blocks
     }

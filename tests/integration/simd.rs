@@ -15,8 +15,8 @@ use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::camera::{Camera, FilmSample};
 use p3trace::render::light::{Emitter, LightSample, Receiver, Rectangle};
 use p3trace::render::sampler::{Sample, SampleGrid, SampleRng};
-use p3trace::render::shade::{Phong, Phong8};
-use p3trace::scene::CameraSpec;
+use p3trace::render::shade::{Bounce, Bounce8, Optics8, Phong, Phong8};
+use p3trace::scene::{CameraSpec, Material};
 use p3trace::simd::{F32x8, Mask8, Vec3x8};
 use proptest::prelude::*;
 
@@ -718,6 +718,26 @@ fn emitter() -> impl Strategy<Value = Emitter> {
     ]
 }
 
+/// Materials as the spawn step reads them: opaque or transmissive, with and without a
+/// mirror term, indices of refraction around and below 1 (rays leaving a denser medium).
+fn material() -> impl Strategy<Value = Material> {
+    let colour = (0.0f32..1.0, 0.0f32..1.0, 0.0f32..1.0).prop_map(|(r, g, b)| Vec3::new(r, g, b));
+    let ks = prop_oneof![Just(0.0f32), 0.0f32..1.0];
+    let transmittance = prop_oneof![Just(0.0f32), Just(1.0f32), 0.0f32..1.0];
+    let ior = prop_oneof![Just(1.0f32), 0.5f32..2.5];
+    (colour.clone(), colour, ks, transmittance, ior).prop_map(
+        |(diffuse, specular, ks, transmittance, ior)| Material {
+            diffuse,
+            kd: 0.5,
+            specular,
+            ks,
+            shine: 20.0,
+            transmittance,
+            ior,
+        },
+    )
+}
+
 /// Blinn-Phong terms, with exponents that are integers, fractions, zero and large.
 fn phong() -> impl Strategy<Value = Phong> {
     let colour = (0.0f32..1.0, 0.0f32..1.0, 0.0f32..1.0).prop_map(|(r, g, b)| Vec3::new(r, g, b));
@@ -809,6 +829,42 @@ proptest! {
         for k in (0..8).filter(|k| lit >> k & 1 == 1) {
             let scalar = lanes[k].light(normals[k], dirs[k], lights[k], colour);
             prop_assert_eq!(bits3(got.lane(k)), bits3(scalar), "lane {}", k);
+        }
+    }
+
+    /// `Bounce8::new` against `Bounce::new`, lane by lane and bit for bit, for each lane's
+    /// own material or all lanes on one, both reflectance models, from either side.
+    #[test]
+    fn bounce8_equals_scalar(
+        materials in prop::array::uniform8(material()),
+        shared in any::<bool>(),
+        dirs in prop::array::uniform8(direction()),
+        normals in prop::array::uniform8(direction()),
+        inside in any::<u8>(),
+        ior_here in prop::array::uniform8(prop_oneof![Just(1.0f32), 0.5f32..2.5]),
+        schlick in any::<bool>(),
+    ) {
+        let lanes: [&Material; 8] = std::array::from_fn(|k| &materials[if shared { 0 } else { k }]);
+        let got = Bounce8::new(
+            Vec3x8::from_lanes(dirs),
+            Vec3x8::from_lanes(normals),
+            Mask8::from_bitmask(inside),
+            F32x8::from_array(ior_here),
+            &Optics8::new(lanes),
+            schlick,
+        );
+        for k in 0..8 {
+            let scalar = Bounce::new(dirs[k], normals[k], inside >> k & 1 == 1, ior_here[k], lanes[k], schlick);
+            let reflected = (got.reflected.bitmask() >> k & 1 == 1)
+                .then(|| (bits3(got.mirror.lane(k)), bits3(got.reflected_weight.lane(k))));
+            let expected = scalar.reflected.map(|(d, w)| (bits3(d), bits3(w)));
+            prop_assert_eq!(reflected, expected, "reflected, lane {}", k);
+            let transmitted = (got.transmitted.bitmask() >> k & 1 == 1).then(|| {
+                let lane = |v: &Vec3x8| bits3(v.lane(k));
+                (lane(&got.refracted), lane(&got.transmitted_weight), bits(got.ior_next.lane(k)))
+            });
+            let expected = scalar.transmitted.map(|(d, w, ior)| (bits3(d), bits3(w), bits(ior)));
+            prop_assert_eq!(transmitted, expected, "transmitted, lane {}", k);
         }
     }
 }
