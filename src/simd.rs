@@ -380,6 +380,12 @@ impl Vec3x8 {
         z: F32x8::ZERO,
     };
 
+    /// `v` in each component, lane by lane (glam's `Vec3::splat` of each lane's `v`).
+    #[inline]
+    pub fn from_components(v: F32x8) -> Self {
+        Vec3x8 { x: v, y: v, z: v }
+    }
+
     /// The same vector in every lane.
     #[inline]
     pub fn splat(v: Vec3) -> Self {

@@ -100,6 +100,23 @@ pub trait Shapes {
     /// The hit at `t` along `ray` (barycentrics `u`, `v` for triangles; the ray's time
     /// for moving primitives) recomputed on the surface, with its error bound and normal.
     fn surface_point(&self, i: usize, ray: &Ray, t: f32, u: f32, v: f32) -> SurfacePoint;
+
+    /// [`Shapes::surface_point`] for eight hits, lane `k` on primitive `indices[k]` (the
+    /// hit of `hits[k]` along `rays[k]`), each lane bit for bit the scalar answer. By
+    /// default one lane at a time; a kind with an eight-lane twin overrides it.
+    fn surface_points8(&self, indices: [usize; 8], rays: &[Ray; 8], hits: &Hits8) -> SurfacePoint8 {
+        SurfacePoint8::from_lanes(std::array::from_fn(|k| {
+            self.surface_point(indices[k], &rays[k], hits.t[k], hits.u[k], hits.v[k])
+        }))
+    }
+}
+
+/// Eight hits' distances and barycentrics, as [`Shapes::surface_points8`] reads them.
+#[derive(Clone, Copy, Debug)]
+pub struct Hits8 {
+    pub t: [f32; 8],
+    pub u: [f32; 8],
+    pub v: [f32; 8],
 }
 
 /// What a profile chooses in an intersection: the form of the sphere test's quadratic.
@@ -267,6 +284,40 @@ pub struct SurfacePoint {
     pub point: Vec3,
     pub error: Vec3,
     pub normal: Vec3,
+}
+
+/// [`SurfacePoint`] for eight hits, as structure of arrays.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint8 {
+    pub point: Vec3x8,
+    pub error: Vec3x8,
+    pub normal: Vec3x8,
+}
+
+impl SurfacePoint8 {
+    /// Lane `k` from `points[k]`.
+    pub fn from_lanes(points: [SurfacePoint; 8]) -> Self {
+        SurfacePoint8 {
+            point: Vec3x8::from_lanes(points.map(|p| p.point)),
+            error: Vec3x8::from_lanes(points.map(|p| p.error)),
+            normal: Vec3x8::from_lanes(points.map(|p| p.normal)),
+        }
+    }
+
+    pub fn lane(&self, k: usize) -> SurfacePoint {
+        SurfacePoint {
+            point: self.point.lane(k),
+            error: self.error.lane(k),
+            normal: self.normal.lane(k),
+        }
+    }
+
+    /// Sets lane `k` to `point` (a lane a kind's twin leaves to its scalar form).
+    pub fn set_lane(&mut self, k: usize, point: SurfacePoint) {
+        self.point.set_lane(k, point.point);
+        self.error.set_lane(k, point.error);
+        self.normal.set_lane(k, point.normal);
+    }
 }
 
 /// The origin of a ray leaving `point`, whose error is bounded by `error` on each axis,

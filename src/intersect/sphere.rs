@@ -6,8 +6,8 @@ use glam::Vec3;
 
 use super::{first_root_in, first_root_in8};
 use super::{
-    gamma, trusted_box, Aabb, BoxPack8, IntersectOptions, LeafPack, RayQuery, RayQuery8, Shapes,
-    SurfacePoint, TriangleHit, TriangleHit8,
+    gamma, trusted_box, Aabb, BoxPack8, Hits8, IntersectOptions, LeafPack, RayQuery, RayQuery8,
+    Shapes, SurfacePoint, SurfacePoint8, TriangleHit, TriangleHit8,
 };
 
 use crate::ray::{Ray, RayPacket};
@@ -366,6 +366,36 @@ impl Shapes for Spheres {
     fn surface_point(&self, i: usize, ray: &Ray, t: f32, _u: f32, _v: f32) -> SurfacePoint {
         let Sphere { centre, radius, .. } = self.records[i];
         sphere_surface_point(centre, radius, ray, t)
+    }
+
+    /// The scalar surface point (`sphere_surface_point`) eight at a time; a lane whose
+    /// offset from the centre has no direction (rare) is left to the scalar form.
+    fn surface_points8(&self, indices: [usize; 8], rays: &[Ray; 8], hits: &Hits8) -> SurfacePoint8 {
+        let records = indices.map(|i| &self.records[i]);
+        let centre = Vec3x8::from_lanes(records.map(|r| r.centre));
+        let radius = F32x8::from_array(records.map(|r| r.radius));
+        let origin = Vec3x8::from_lanes(rays.map(|r| r.origin));
+        let dir = Vec3x8::from_lanes(rays.map(|r| r.dir));
+        let from_centre = (origin - centre) + dir.scale(F32x8::from_array(hits.t));
+        let length = from_centre.length();
+        let normal = from_centre / length;
+        let radial = normal.scale(radius);
+        let point = centre + radial;
+        let error =
+            point.abs().scale(F32x8::splat(gamma(2))) + radial.abs().scale(F32x8::splat(gamma(6)));
+        let mut points = SurfacePoint8 {
+            point,
+            error,
+            normal,
+        };
+        let directed = length.gt(F32x8::ZERO) & length.is_finite();
+        for k in 0..8 {
+            if directed.bitmask() >> k & 1 == 0 {
+                let Sphere { centre, radius, .. } = *records[k];
+                points.set_lane(k, sphere_surface_point(centre, radius, &rays[k], hits.t[k]));
+            }
+        }
+        points
     }
 }
 

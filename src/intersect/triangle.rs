@@ -25,8 +25,8 @@
 use glam::Vec3;
 
 use super::{
-    gamma, trusted_box, Aabb, BoxPack8, BoxRay8, IntersectOptions, LeafPack, RayQuery, RayQuery8,
-    Shapes, SurfacePoint,
+    gamma, trusted_box, Aabb, BoxPack8, BoxRay8, Hits8, IntersectOptions, LeafPack, RayQuery,
+    RayQuery8, Shapes, SurfacePoint, SurfacePoint8,
 };
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{for_lanes, prefetch, F32x8, Mask8, Vec3x8};
@@ -595,6 +595,42 @@ impl Shapes for Triangles {
             error: gamma(7) * (p0.abs() + along1.abs() + along2.abs()) + Vec3::splat(product),
             normal: self.shading_normal(shading, u, v, || cross.normalize_or_zero()),
         }
+    }
+
+    /// The flat triangles' points eight at a time; a smooth one's lane (vertex normals)
+    /// is left to [`Shapes::surface_point`].
+    fn surface_points8(&self, indices: [usize; 8], rays: &[Ray; 8], hits: &Hits8) -> SurfacePoint8 {
+        let records = indices.map(|i| &self.records[i]);
+        let field = |f: fn(&Triangle) -> Vec3| Vec3x8::from_lanes(records.map(f));
+        let (p0, e1, e2) = (field(|r| r.p0), field(|r| r.e1), field(|r| r.e2));
+        let (u, v) = (F32x8::from_array(hits.u), F32x8::from_array(hits.v));
+        let (along1, along2) = (e1.scale(u), e2.scale(v));
+        let point = p0 + along1 + along2;
+        let cross = e1.cross(e2);
+        let area = cross.length();
+        let skew = area
+            .gt(F32x8::ZERO)
+            .select(e1.length() * e2.length() / area, F32x8::splat(1.0));
+        let product = F32x8::splat(gamma(5)) * skew * (along1 + along2).length();
+        let sum = p0.abs() + along1.abs() + along2.abs();
+        let error = sum.scale(F32x8::splat(gamma(7))) + Vec3x8::from_components(product);
+        // `normalize_or_zero`: the cross product over its length where that is a number.
+        let rcp = F32x8::splat(1.0) / area;
+        let normal =
+            (rcp.is_finite() & rcp.gt(F32x8::ZERO)).select_vec(cross.scale(rcp), Vec3x8::ZERO);
+        let mut points = SurfacePoint8 {
+            point,
+            error,
+            normal,
+        };
+        for (k, record) in records.iter().enumerate() {
+            if record.shading != Self::FLAT {
+                let scalar =
+                    self.surface_point(indices[k], &rays[k], hits.t[k], hits.u[k], hits.v[k]);
+                points.set_lane(k, scalar);
+            }
+        }
+        points
     }
 }
 

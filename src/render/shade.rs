@@ -22,7 +22,7 @@ use super::light::{emitters, Emitter, Receiver, DEFAULT_LIGHT_GRID};
 use super::sampler::{dim, Sample, SampleGrid, SampleRng};
 use super::skybox::Skybox;
 use crate::accel::Tracer;
-use crate::intersect::{spawn_origin, SphereRoots, SurfacePoint};
+use crate::intersect::{spawn_origin, Hits8, SphereRoots, SurfacePoint, SurfacePoint8};
 use crate::ray::{Hit, Ray};
 use crate::scene::{Frame, Material, Scene};
 use crate::simd::{F32x8, Mask8, Vec3x8};
@@ -319,8 +319,8 @@ impl<'a> Shader<'a> {
         surface
     }
 
-    /// [`Shader::surface`] but for `outward`, left at the point: the stream renderer
-    /// offsets eight points at a time ([`crate::intersect::spawn_origin8`]).
+    /// [`Shader::surface`] but for `outward`, left at the point. The stream renderer takes
+    /// eight hits at a time ([`Shader::hit_points8`]).
     #[inline(always)]
     pub(super) fn hit_point(&self, ray: &Ray, hit: &Hit) -> Surface {
         let geometry = &self.tracer.geometry;
@@ -347,6 +347,40 @@ impl<'a> Shader<'a> {
             inside,
             error,
             outward: p,
+        }
+    }
+
+    /// [`Shader::hit_point`] for eight hits (lane `k`: `hits[k]` along `rays[k]`): the
+    /// points, their error bounds (zero with the `course` profile, which has none) and the
+    /// outward normals, eight at a time where the hits share a kind with a twin.
+    pub(super) fn hit_points8(&self, rays: &[Ray; 8], hits: &[Hit; 8]) -> SurfacePoint8 {
+        let geometry = &self.tracer.geometry;
+        match self.options.profile {
+            Profile::Standard => {
+                let kind = hits[0].prim.kind();
+                if hits.iter().all(|h| h.prim.kind() == kind) {
+                    let indices = hits.map(|h| h.prim.index());
+                    let lanes = Hits8 {
+                        t: hits.map(|h| h.t),
+                        u: hits.map(|h| h.u),
+                        v: hits.map(|h| h.v),
+                    };
+                    return geometry.surface_points8(kind, indices, rays, &lanes);
+                }
+                SurfacePoint8::from_lanes(std::array::from_fn(|k| {
+                    let Hit { prim, t, u, v } = hits[k];
+                    geometry.surface_point(prim, &rays[k], t, u, v)
+                }))
+            }
+            Profile::Course => SurfacePoint8::from_lanes(std::array::from_fn(|k| {
+                let (ray, hit) = (&rays[k], &hits[k]);
+                let point = ray.at(hit.t);
+                SurfacePoint {
+                    point,
+                    error: Vec3::ZERO,
+                    normal: geometry.normal(hit.prim, point, hit.u, hit.v, ray.time),
+                }
+            })),
         }
     }
 

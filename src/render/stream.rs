@@ -3,8 +3,9 @@
 //! hits' shadow rays light by light, are traced as packets of eight by the stream
 //! scheduler ([`crate::accel::stream`], which `bench` measures), the hits are shaded,
 //! and the rays they spawn make the next depth's queue. A depth's hits are gathered eight
-//! to a [`HitBlock`] (structure of arrays, filled lane by lane in place), whose points
-//! are offset off the surface ([`spawn_origin8`]), whose shadow rays are set up
+//! to a [`HitBlock`] (structure of arrays), whose points are recomputed on the surfaces
+//! ([`Shader::hit_points8`]) and offset off them ([`spawn_origin8`]), whose shadow rays
+//! are set up
 //! ([`crate::render::light::Emitter::sample8`]), whose Blinn-Phong sums are taken
 //! ([`super::shade::Phong8`]) and whose reflected and transmitted rays are made
 //! ([`Bounce8`]) eight lanes at a time, light by light in the scalar order, bit for bit
@@ -19,10 +20,11 @@ use glam::Vec3;
 
 use super::light::Receiver;
 use super::sampler::Sample;
-use super::shade::{Bounce8, Optics8, Phong8, RayCounts, RayKind, Shader, Surface, EPS};
+use super::shade::{Bounce8, Optics8, Phong8, Profile, RayCounts, RayKind, Shader, EPS};
 use crate::accel::stream::{self, Occlusions, Query};
 use crate::intersect::spawn_origin8;
-use crate::ray::Ray;
+use crate::prim::{PrimId, PrimKind};
+use crate::ray::{Hit, Ray};
 use crate::simd::{for_lanes, F32x8, Mask8, Vec3x8};
 
 /// The rays of one depth, and what they bring back.
@@ -156,8 +158,7 @@ fn shade_depth<'a>(
             Some(hit) => {
                 queue.colour.push(Vec3::ZERO);
                 queue.hit.push(true);
-                let surface = shader.hit_point(ray, hit);
-                blocks.push(i as u32, &surface, ray.dir, geometry.material(hit.prim));
+                blocks.push(shader, &queue.rays, i as u32, *hit);
             }
             None => {
                 queue.colour.push(shader.background(ray.dir, depth));
@@ -165,7 +166,7 @@ fn shade_depth<'a>(
             }
         }
     }
-    let blocks = blocks.finish();
+    let blocks = blocks.finish(shader, &queue.rays);
     let shadows = ShadowQueue::trace(shader, arena, queue, &blocks);
     rays.shadow += shadows.traced;
     for (b, block) in blocks.iter().enumerate() {
@@ -242,19 +243,19 @@ fn shade_depth<'a>(
 /// Eight hits of a depth as structure of arrays, for the shading of eight at a time.
 #[derive(Clone, Copy, Debug)]
 struct HitBlock {
-    /// The lanes that hold a hit; the others repeat lane 0 and are inert.
+    /// The lanes that hold a hit; the others repeat lane 0.
     lanes: u8,
     /// The lanes whose ray arrived from inside the surface.
     inside: u8,
-    /// The lanes with an error bound (all but with the `course` profile).
-    bounded: u8,
+    /// Whether the points have error bounds (all but with the `course` profile).
+    bounded: bool,
     /// Each lane's index in the depth's queue.
     ray: [u32; 8],
     material: [u32; 8],
     point: Vec3x8,
     /// The normal facing the ray.
     nf: Vec3x8,
-    /// The bound of the point's error on each axis, in the lanes of `bounded`.
+    /// The bound of the point's error on each axis, where `bounded`.
     error: Vec3x8,
     /// Where shadow and reflected rays start ([`HitBlock::offset`]).
     origin: Vec3x8,
@@ -263,116 +264,97 @@ struct HitBlock {
 }
 
 impl HitBlock {
+    /// The block of the hits `hits` of the rays `ray` (indices into `rays`), whose first
+    /// `count` lanes are hits and whose others repeat lane 0: the points recomputed on the
+    /// surfaces ([`Shader::hit_points8`]) and the normals turned to face the rays, as
+    /// [`Shader::hit_point`] turns them.
+    fn new(shader: &Shader, rays: &[Ray], ray: [u32; 8], hits: &[Hit; 8], count: usize) -> Self {
+        let lane_rays = ray.map(|i| rays[i as usize]);
+        let surface = shader.hit_points8(&lane_rays, hits);
+        let dir = Vec3x8::from_lanes(lane_rays.map(|r| r.dir));
+        let inside = dir.dot(surface.normal).gt(F32x8::ZERO);
+        let nf = inside.select_vec(-surface.normal, surface.normal);
+        let geometry = &shader.tracer.geometry;
+        let mut block = HitBlock {
+            lanes: ((1u16 << count) - 1) as u8,
+            inside: inside.bitmask(),
+            bounded: shader.options.profile == Profile::Standard,
+            ray,
+            material: hits.map(|h| geometry.material(h.prim)),
+            point: surface.point,
+            nf,
+            error: surface.error,
+            origin: Vec3x8::ZERO,
+            dir,
+        };
+        block.origin = block.offset(nf);
+        block
+    }
+
     /// The points offset towards `side` (a unit vector per lane), as `Surface::origin`
     /// offsets them: by the error bound ([`spawn_origin8`]), or with the `course` profile
     /// by [`EPS`]. Shadow and reflected rays start on the side of the facing normal
     /// (`origin`), transmitted rays on the other.
-    ///
-    /// A profile offsets every hit one way, so only a block's padding lanes mix the two:
-    /// the way no lane takes is not computed.
     fn offset(&self, side: Vec3x8) -> Vec3x8 {
-        let by_eps = || self.point + side.scale(F32x8::splat(EPS));
-        match self.bounded {
-            0 => by_eps(),
-            0xFF => spawn_origin8(self.point, self.error, side),
-            bounded => Mask8::from_bitmask(bounded)
-                .select_vec(spawn_origin8(self.point, self.error, side), by_eps()),
+        if self.bounded {
+            spawn_origin8(self.point, self.error, side)
+        } else {
+            self.point + side.scale(F32x8::splat(EPS))
         }
     }
 }
 
 /// A depth's hits gathered into [`HitBlock`]s, in queue order.
 struct HitBlocks<'a> {
-    /// The blocks, the last one being filled in place (a block copied in costs a
-    /// `memcpy` of its 700-odd bytes).
     blocks: ArenaVec<'a, HitBlock>,
-    /// The lanes of the last block filled.
+    /// The hits of the block being gathered, and their rays' indices in the queue.
+    ray: [u32; 8],
+    hits: [Hit; 8],
     filled: usize,
-    /// The last block's `inside` and `bounded` masks, kept here while it fills: set in
-    /// the block lane by lane, each would be read back from a line still being written.
-    inside: u8,
-    bounded: u8,
 }
 
 impl<'a> HitBlocks<'a> {
-    const EMPTY: HitBlock = HitBlock {
-        lanes: 0,
-        inside: 0,
-        bounded: 0,
-        error: Vec3x8::ZERO,
-        ray: [0; 8],
-        material: [0; 8],
-        point: Vec3x8::ZERO,
-        nf: Vec3x8::ZERO,
-        origin: Vec3x8::ZERO,
-        dir: Vec3x8::ZERO,
-    };
-
     fn with_capacity_in(hits: usize, arena: &'a Bump) -> Self {
+        let none = Hit {
+            t: 0.0,
+            prim: PrimId::new(PrimKind::Sphere, 0),
+            u: 0.0,
+            v: 0.0,
+        };
         HitBlocks {
             blocks: ArenaVec::with_capacity_in(hits.div_ceil(8), arena),
-            filled: 8,
-            inside: 0,
-            bounded: 0,
+            ray: [0; 8],
+            hits: [none; 8],
+            filled: 0,
         }
     }
 
-    /// Adds the hit on `surface` (its `outward` not yet set) of ray `ray`, of direction
-    /// `dir`, on material `material`.
-    fn push(&mut self, ray: u32, surface: &Surface, dir: Vec3, material: u32) {
-        if self.filled == 8 {
-            self.close();
-            self.blocks.push(Self::EMPTY);
-            self.filled = 0;
-        }
-        let k = self.filled;
-        let block = self.blocks.last_mut().expect("a block is open");
-        self.inside |= u8::from(surface.inside) << k;
-        if let Some(error) = surface.error {
-            self.bounded |= 1 << k;
-            block.error.set_lane(k, error);
-        }
-        block.ray[k] = ray;
-        block.material[k] = material;
-        block.point.set_lane(k, surface.p);
-        block.nf.set_lane(k, surface.nf);
-        block.dir.set_lane(k, dir);
+    /// Adds the hit `hit` of ray `ray` of `rays` (the depth's queue).
+    fn push(&mut self, shader: &Shader, rays: &[Ray], ray: u32, hit: Hit) {
+        self.ray[self.filled] = ray;
+        self.hits[self.filled] = hit;
         self.filled += 1;
+        if self.filled == 8 {
+            self.close(shader, rays);
+        }
     }
 
-    /// Writes the last block's masks.
-    fn close(&mut self) {
-        if let Some(block) = self.blocks.last_mut() {
-            block.lanes = ((1u16 << self.filled) - 1) as u8;
-            block.inside = self.inside;
-            block.bounded = self.bounded;
+    /// Makes the hits gathered a block, its free lanes repeating its lane 0.
+    fn close(&mut self, shader: &Shader, rays: &[Ray]) {
+        let count = self.filled;
+        if count == 0 {
+            return;
         }
-        (self.inside, self.bounded) = (0, 0);
+        for k in count..8 {
+            (self.ray[k], self.hits[k]) = (self.ray[0], self.hits[0]);
+        }
+        let block = HitBlock::new(shader, rays, self.ray, &self.hits, count);
+        self.blocks.push(block);
+        self.filled = 0;
     }
 
-    /// The blocks, the last one's free lanes repeating its lane 0, each offset. The
-    /// offsets come last: a block's just-written lanes would not forward to its vector
-    /// loads.
-    fn finish(mut self) -> ArenaVec<'a, HitBlock> {
-        self.close();
-        let n = self.filled;
-        if let Some(block) = self.blocks.last_mut() {
-            for k in n..8 {
-                block.ray[k] = block.ray[0];
-                block.material[k] = block.material[0];
-                for v in [
-                    &mut block.point,
-                    &mut block.nf,
-                    &mut block.error,
-                    &mut block.dir,
-                ] {
-                    v.set_lane(k, v.lane(0));
-                }
-            }
-        }
-        for block in self.blocks.iter_mut() {
-            block.origin = block.offset(block.nf);
-        }
+    fn finish(mut self, shader: &Shader, rays: &[Ray]) -> ArenaVec<'a, HitBlock> {
+        self.close(shader, rays);
         self.blocks
     }
 }

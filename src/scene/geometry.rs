@@ -6,7 +6,8 @@
 use glam::Vec3;
 
 use crate::intersect::{
-    Aabb, RayQuery, RayQuery8, Shapes, SurfacePoint, TriangleHit, TriangleHit8,
+    Aabb, Hits8, RayQuery, RayQuery8, Shapes, SurfacePoint, SurfacePoint8, TriangleHit,
+    TriangleHit8,
 };
 use crate::prim::{prim_kinds, PrimId, PrimKind};
 use crate::ray::Ray;
@@ -99,6 +100,22 @@ macro_rules! define_geometry {
                 let i = prim.index();
                 match prim.kind() {
                     $(PrimKind::$kind => self.$field.surface_point(i, ray, t, u, v),)*
+                }
+            }
+
+            /// [`Geometry::surface_point`] for eight hits on primitives of one kind `kind`
+            /// (lane `k` on the primitive of index `indices[k]`), by the kind's eight-lane
+            /// twin where it has one ([`Shapes::surface_points8`]).
+            #[inline]
+            pub fn surface_points8(
+                &self,
+                kind: PrimKind,
+                indices: [usize; 8],
+                rays: &[Ray; 8],
+                hits: &Hits8,
+            ) -> SurfacePoint8 {
+                match kind {
+                    $(PrimKind::$kind => self.$field.surface_points8(indices, rays, hits),)*
                 }
             }
         }

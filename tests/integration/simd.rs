@@ -7,9 +7,9 @@
 
 use glam::{Vec2, Vec3};
 use p3trace::intersect::{
-    self, Aabb, BoxPack8, BoxRay, BoxRay8, Boxes, IntersectOptions, Intervals8, LeafPack, RayQuery,
-    RayQuery8, SpherePack8, SphereRoots, Spheres, TriangleHit, TriangleHit8, TrianglePack8,
-    Triangles,
+    self, Aabb, BoxPack8, BoxRay, BoxRay8, Boxes, Hits8, IntersectOptions, Intervals8, LeafPack,
+    RayQuery, RayQuery8, Shapes, SpherePack8, SphereRoots, Spheres, SurfacePoint, SurfacePoint8,
+    TriangleHit, TriangleHit8, TrianglePack8, Triangles,
 };
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::camera::{Camera, FilmSample};
@@ -866,5 +866,48 @@ proptest! {
             let expected = scalar.transmitted.map(|(d, w, ior)| (bits3(d), bits3(w), bits(ior)));
             prop_assert_eq!(transmitted, expected, "transmitted, lane {}", k);
         }
+    }
+
+    /// Triangles' and spheres' `surface_points8` against `surface_point`, lane by lane and
+    /// bit for bit: flat and smooth triangles, degenerate ones, barycentrics in and out of
+    /// the triangle; spheres hit anywhere along random rays, at their centre too.
+    #[test]
+    fn surface_points8_equal_scalar(
+        triangles in prop::array::uniform8(triangle()),
+        smooth in any::<u8>(),
+        normals in prop::array::uniform8(direction()),
+        centres in prop::array::uniform8(point()),
+        radii in prop::array::uniform8(radius()),
+        rays in prop::array::uniform8(ray()),
+        t in prop::array::uniform8(prop_oneof![3 => 0.0f32..10.0, 1 => Just(0.0f32)]),
+        u in prop::array::uniform8(prop_oneof![3 => 0.0f32..1.0, 1 => -1.0f32..2.0]),
+        v in prop::array::uniform8(prop_oneof![3 => 0.0f32..1.0, 1 => -1.0f32..2.0]),
+        order in Just([3usize, 0, 7, 7, 1, 5, 2, 4]),
+    ) {
+        let mut tris = Triangles::default();
+        let mut spheres = Spheres::default();
+        for k in 0..8 {
+            let [p0, e1, e2] = triangles[k];
+            let smooth = (smooth >> k & 1 == 1).then(|| [normals[k], normals[(k + 1) % 8], normals[(k + 2) % 8]]);
+            tris.push([p0, p0 + e1, p0 + e2], smooth, 0);
+            spheres.push(centres[k], radii[k], 0);
+        }
+        let hits = Hits8 { t, u, v };
+        let check = |name: &str, got: SurfacePoint8, lane: &dyn Fn(usize) -> SurfacePoint| {
+            for k in 0..8 {
+                let (g, e) = (got.lane(k), lane(k));
+                assert_eq!(
+                    [bits3(g.point), bits3(g.error), bits3(g.normal)],
+                    [bits3(e.point), bits3(e.error), bits3(e.normal)],
+                    "{name}, lane {k}: {g:?} against {e:?}"
+                );
+            }
+        };
+        check("triangles", tris.surface_points8(order, &rays, &hits), &|k| {
+            tris.surface_point(order[k], &rays[k], t[k], u[k], v[k])
+        });
+        check("spheres", spheres.surface_points8(order, &rays, &hits), &|k| {
+            spheres.surface_point(order[k], &rays[k], t[k], u[k], v[k])
+        });
     }
 }
