@@ -7,14 +7,18 @@
 //! rays together, the protocol's sets their pixel blocks. Occlusion queries are grouped by
 //! the light they head for ([`Occlusions`]), in their order within each light, so that a
 //! packet's rays share an end point; the last packet of one light takes the first rays of
-//! the next. What the other groupings cost, by end point and by direction octant, is in
+//! the next. Both are packed eight at a time by [`Packer`], which traces a packet as soon
+//! as it is full: the renderer's shadow rays, made light by light, go to it directly.
+//! What the other groupings cost, by end point and by direction octant, is in
 //! BENCHMARKS.md ("What did not pay").
 
 use bumpalo::collections::Vec as ArenaVec;
 use bumpalo::Bump;
+use glam::Vec3;
 
 use super::Tracer;
 use crate::ray::{Hit, Ray, RayPacket};
+use crate::simd::for_lanes;
 
 /// One query of a stream: a ray and the far end of its interval, which starts at 0.
 pub trait Query: Copy {
@@ -97,13 +101,14 @@ impl<'a, Q: Query> Occlusions<'a, Q> {
     #[inline(never)]
     pub fn trace(&self, tracer: &Tracer, arena: &'a Bump) -> ArenaVec<'a, bool> {
         let n = self.queries.len();
-        let occluded = |packet: &RayPacket| tracer.occluded_packet(packet);
-        let lanes = |answer: u8, lanes: usize| (0..lanes).map(move |k| answer & (1 << k) != 0);
+        let mut blocked = bumpalo::vec![in arena; false; n];
+        let mut packer = Packer::new(tracer);
+        let mut mark = |i: u32| blocked[i as usize] = true;
         if self.grouped {
-            let mut blocked = ArenaVec::with_capacity_in(n, arena);
-            packets(&self.queries, occluded, |queries, answer| {
-                blocked.extend(lanes(answer, queries.len()))
-            });
+            for (i, query) in self.queries.iter().enumerate() {
+                packer.push(query.ray(), query.t_max(), i as u32, &mut mark);
+            }
+            packer.flush(&mut mark);
             return blocked;
         }
         // Each light's first place in the order, then its next free one.
@@ -121,16 +126,67 @@ impl<'a, Q: Query> Occlusions<'a, Q> {
             order[*place as usize] = i as u32;
             *place += 1;
         }
-        let mut blocked = bumpalo::vec![in arena; false; n];
-        let mut traced = order.iter();
-        let in_order = order.iter().map(|&i| &self.queries[i as usize]);
-        packets(in_order, occluded, |queries, answer| {
-            // The lanes first: `zip` then takes no index beyond the packet's.
-            for (b, &i) in lanes(answer, queries.len()).zip(traced.by_ref()) {
-                blocked[i as usize] = b;
-            }
-        });
+        for &i in &order {
+            let query = &self.queries[i as usize];
+            packer.push(query.ray(), query.t_max(), i, &mut mark);
+        }
+        packer.flush(&mut mark);
         blocked
+    }
+}
+
+/// Occlusion queries packed eight at a time in the order they come, each packet traced
+/// through [`Tracer::occluded_packet`] as soon as it is full (or flushed), the tags of its
+/// blocked queries handed back. A stream grouped by light goes through it directly;
+/// [`Occlusions`] groups one first.
+pub struct Packer<'t, T> {
+    tracer: &'t Tracer<'t>,
+    rays: [Ray; 8],
+    t_max: [f32; 8],
+    tags: [T; 8],
+    len: usize,
+}
+
+impl<'t, T: Copy + Default> Packer<'t, T> {
+    pub fn new(tracer: &'t Tracer<'t>) -> Self {
+        Packer {
+            tracer,
+            rays: [Ray::new(Vec3::ZERO, Vec3::ZERO); 8],
+            t_max: [0.0; 8],
+            tags: [T::default(); 8],
+            len: 0,
+        }
+    }
+
+    /// Adds the query along `ray` within `(0, t_max)`, tagged `tag`; when that fills a
+    /// packet, traces it and gives `blocked` the tags of the queries that are.
+    #[inline(always)]
+    pub fn push(&mut self, ray: &Ray, t_max: f32, tag: T, blocked: &mut impl FnMut(T)) {
+        let k = self.len;
+        (self.rays[k], self.t_max[k], self.tags[k]) = (*ray, t_max, tag);
+        self.len += 1;
+        if self.len == 8 {
+            self.flush(blocked);
+        }
+    }
+
+    /// Traces the queries added since the last packet; a partial packet's missing lanes
+    /// repeat its first query and are inactive.
+    pub fn flush(&mut self, blocked: &mut impl FnMut(T)) {
+        let n = self.len;
+        if n == 0 {
+            return;
+        }
+        for k in n..8 {
+            (self.rays[k], self.t_max[k]) = (self.rays[0], self.t_max[0]);
+        }
+        let packet = RayPacket::new(&self.rays)
+            .with_t_max(self.t_max)
+            .with_active((1u16 << n).wrapping_sub(1) as u8);
+        for_lanes(self.tracer.occluded_packet(&packet), |k| {
+            blocked(self.tags[k])
+        });
+        self.len = 0;
     }
 }
 

@@ -21,7 +21,7 @@ use glam::Vec3;
 use super::light::Receiver;
 use super::sampler::Sample;
 use super::shade::{Bounce8, Optics8, Phong8, Profile, RayCounts, RayKind, Shader, EPS};
-use crate::accel::stream::{self, Occlusions, Query};
+use crate::accel::stream;
 use crate::intersect::spawn_origin8;
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{Hit, Ray};
@@ -376,13 +376,15 @@ struct ShadowQueue<'a> {
 
 impl<'a> ShadowQueue<'a> {
     /// Sets up every hit's shadow ray to every light, eight hits at a time, and traces
-    /// them as a stream, light by light.
+    /// them light by light, packed eight at a time as they are made
+    /// ([`stream::Packer`]: the stream scheduler's packets of a stream grouped by light).
     fn trace(shader: &Shader, arena: &'a Bump, queue: &Queue, blocks: &[HitBlock]) -> Self {
         let lights = shader.lights.len();
         let mut dir = ArenaVec::with_capacity_in(lights * blocks.len(), arena);
         let mut lit = ArenaVec::with_capacity_in(lights * blocks.len(), arena);
         let mut colour = ArenaVec::with_capacity_in(lights, arena);
-        let mut rays = Occlusions::with_capacity_in(8 * lights * blocks.len(), arena);
+        let mut packer = stream::Packer::new(shader.tracer);
+        let mut traced = 0;
         for (index, emitter) in shader.lights.iter().enumerate() {
             colour.push(emitter.colour());
             for block in blocks {
@@ -394,57 +396,36 @@ impl<'a> ShadowQueue<'a> {
                 let sample = |k: usize| queue.samples[block.ray[k] as usize];
                 let (facing, incident) = emitter.sample8(index, &receiver, sample);
                 let facing = facing.bitmask() & block.lanes;
+                let entry = lit.len() as u32;
+                dir.push(incident.dir);
+                lit.push(facing);
+                traced += u64::from(facing.count_ones());
                 for_lanes(facing, |k| {
                     let ray = Ray {
                         origin: block.origin.lane(k),
                         dir: incident.dir.lane(k),
                         time: queue.rays[block.ray[k] as usize].time,
                     };
-                    rays.push(
-                        index as u32,
-                        ShadowQuery {
-                            ray,
-                            distance: incident.distance.lane(k),
-                        },
-                    );
+                    // The ray's entry (light and block) and lane, for `unlit`.
+                    let tag = entry << 3 | k as u32;
+                    let distance = incident.distance.lane(k);
+                    packer.push(&ray, distance, tag, &mut |tag| unlit(&mut lit, tag));
                 });
-                dir.push(incident.dir);
-                lit.push(facing);
             }
         }
-        let blocked = rays.trace(shader.tracer, arena);
-        // The answers come in the order the rays were pushed: light, block, lane.
-        let mut answers = blocked.iter();
-        for lanes_lit in lit.iter_mut() {
-            for_lanes(*lanes_lit, |k| {
-                if answers.next() == Some(&true) {
-                    *lanes_lit &= !(1 << k);
-                }
-            });
-        }
+        packer.flush(&mut |tag| unlit(&mut lit, tag));
         ShadowQueue {
             lights,
             dir,
             lit,
             colour,
-            traced: blocked.len() as u64,
+            traced,
         }
     }
 }
 
-/// A shadow ray: towards a light's point, which is `distance` away along it.
-#[derive(Clone, Copy, Debug)]
-struct ShadowQuery {
-    ray: Ray,
-    distance: f32,
-}
-
-impl Query for ShadowQuery {
-    fn ray(&self) -> &Ray {
-        &self.ray
-    }
-
-    fn t_max(&self) -> f32 {
-        self.distance
-    }
+/// Takes the lane of a blocked shadow ray, tagged with its entry and lane, out of the lanes
+/// its light reaches.
+fn unlit(lit: &mut [u8], tag: u32) {
+    lit[tag as usize >> 3] &= !(1 << (tag & 7));
 }
