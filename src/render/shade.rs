@@ -561,35 +561,50 @@ pub struct Phong8 {
     diffuse: Vec3x8,
     specular: Vec3x8,
     shine: F32x8,
+    /// The lanes whose highlight needs its power: all but those with no specular term and
+    /// an exponent in `[0, inf)`, whose `0 x^shine` is `0 x 0` for every `x` in `[0, 1]`.
+    powered: Mask8,
 }
 
 impl Phong8 {
     /// The terms of `lanes`, splat when every lane has the same (most blocks of a mesh).
     #[inline]
     pub fn new(lanes: [&Phong; 8]) -> Self {
-        if lanes.iter().all(|&p| std::ptr::eq(p, lanes[0])) {
+        let (diffuse, specular, shine) = if lanes.iter().all(|&p| std::ptr::eq(p, lanes[0])) {
             let p = lanes[0];
-            return Phong8 {
-                diffuse: Vec3x8::splat(p.diffuse),
-                specular: Vec3x8::splat(p.specular),
-                shine: F32x8::splat(p.shine),
-            };
-        }
+            (
+                Vec3x8::splat(p.diffuse),
+                Vec3x8::splat(p.specular),
+                F32x8::splat(p.shine),
+            )
+        } else {
+            (
+                Vec3x8::from_lanes(lanes.map(|p| p.diffuse)),
+                Vec3x8::from_lanes(lanes.map(|p| p.specular)),
+                F32x8::from_array(lanes.map(|p| p.shine)),
+            )
+        };
+        let zero = F32x8::ZERO;
+        let dark = specular.x.eq(zero) & specular.y.eq(zero) & specular.z.eq(zero);
+        let finite_power = shine.ge(zero) & shine.lt(F32x8::splat(f32::INFINITY));
         Phong8 {
-            diffuse: Vec3x8::from_lanes(lanes.map(|p| p.diffuse)),
-            specular: Vec3x8::from_lanes(lanes.map(|p| p.specular)),
-            shine: F32x8::from_array(lanes.map(|p| p.shine)),
+            diffuse,
+            specular,
+            shine,
+            powered: !(dark & finite_power),
         }
     }
 
     /// [`Phong::light`] lane by lane, bit for bit in the lanes of `lit`, the only ones
-    /// whose power is taken (the others' value is meaningless).
+    /// whose power is taken (the others' value is meaningless), and of those only where
+    /// it shows (where the specular term is not zero, or the base is above 1).
     #[inline(always)]
     pub fn light(&self, nf: Vec3x8, dir: Vec3x8, l: Vec3x8, colour: Vec3, lit: Mask8) -> Vec3x8 {
         let diffuse = self.diffuse.scale(nf.dot(l).max(F32x8::ZERO));
         let h = (l - dir).normalize();
-        let power = nf.dot(h).max(F32x8::ZERO).powf(self.shine, lit);
-        let specular = self.specular.scale(power);
+        let base = nf.dot(h).max(F32x8::ZERO);
+        let shows = self.powered | base.gt(F32x8::splat(1.0));
+        let specular = self.specular.scale(base.powf(self.shine, lit & shows));
         Vec3x8::splat(colour) * (diffuse + specular)
     }
 }

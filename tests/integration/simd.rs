@@ -738,14 +738,16 @@ fn material() -> impl Strategy<Value = Material> {
     )
 }
 
-/// Blinn-Phong terms, with exponents that are integers, fractions, zero and large.
+/// Blinn-Phong terms, with exponents that are integers, fractions, zero, large and
+/// negative, and specular terms that are sometimes zero (a matte floor).
 fn phong() -> impl Strategy<Value = Phong> {
     let colour = (0.0f32..1.0, 0.0f32..1.0, 0.0f32..1.0).prop_map(|(r, g, b)| Vec3::new(r, g, b));
     let shine = prop_oneof![
         3 => 0.0f32..200.0,
-        1 => prop::sample::select(vec![0.0, 1.0, 20.0, 100.0, 1e4]),
+        1 => prop::sample::select(vec![0.0, 1.0, 20.0, 100.0, 1e4, 1e30, -2.0]),
     ];
-    (colour.clone(), colour, shine).prop_map(|(diffuse, specular, shine)| Phong {
+    let specular = prop_oneof![3 => colour.clone(), 1 => Just(Vec3::ZERO), 1 => Just(Vec3::new(0.0, -0.0, 0.0))];
+    (colour, specular, shine).prop_map(|(diffuse, specular, shine)| Phong {
         diffuse,
         specular,
         shine,
