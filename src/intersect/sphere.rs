@@ -11,7 +11,7 @@ use super::{
 };
 
 use crate::ray::{Ray, RayPacket};
-use crate::simd::{prefetch, F32x8, Mask8, Vec3x8};
+use crate::simd::{for_lanes, prefetch, F32x8, Mask8, Vec3x8};
 
 /// How the sphere test solves its quadratic.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -389,12 +389,10 @@ impl Shapes for Spheres {
             normal,
         };
         let directed = length.gt(F32x8::ZERO) & length.is_finite();
-        for k in 0..8 {
-            if directed.bitmask() >> k & 1 == 0 {
-                let Sphere { centre, radius, .. } = *records[k];
-                points.set_lane(k, sphere_surface_point(centre, radius, &rays[k], hits.t[k]));
-            }
-        }
+        for_lanes(!directed.bitmask(), |k| {
+            let Sphere { centre, radius, .. } = *records[k];
+            points.set_lane(k, sphere_surface_point(centre, radius, &rays[k], hits.t[k]));
+        });
         points
     }
 }

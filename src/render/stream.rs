@@ -5,9 +5,8 @@
 //! and the rays they spawn make the next depth's queue. A depth's hits are gathered eight
 //! to a [`HitBlock`] (structure of arrays), whose points are recomputed on the surfaces
 //! ([`Shader::hit_points8`]) and offset off them ([`spawn_origin8`]), whose shadow rays
-//! are set up
-//! ([`crate::render::light::Emitter::sample8`]), whose Blinn-Phong sums are taken
-//! ([`super::shade::Phong8`]) and whose reflected and transmitted rays are made
+//! are set up ([`crate::render::light::Emitter::sample8`]), whose Blinn-Phong sums are
+//! taken ([`super::shade::Phong8`]) and whose reflected and transmitted rays are made
 //! ([`Bounce8`]) eight lanes at a time, light by light in the scalar order, bit for bit
 //! as the scalar path. A depth queues its reflected rays, then its transmitted ones. Once
 //! the deepest queue is shaded, colours flow back up: each ray's colour, clamped if it
@@ -315,6 +314,7 @@ struct HitBlocks<'a> {
 
 impl<'a> HitBlocks<'a> {
     fn with_capacity_in(hits: usize, arena: &'a Bump) -> Self {
+        // What the lanes hold before their first hit: each is written before it is read.
         let none = Hit {
             t: 0.0,
             prim: PrimId::new(PrimKind::Sphere, 0),
