@@ -435,7 +435,7 @@ fn trace_stream(
             stream.push(set.light[i], query);
         }
         let blocked = stream.trace(tracer, arena);
-        for (query, blocked) in stream.queries().iter().zip(blocked) {
+        for (query, &blocked) in stream.queries().iter().zip(blocked) {
             answers[query.place] = if blocked { 0.0 } else { -1.0 };
         }
     } else {
