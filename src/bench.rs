@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 use bumpalo::Bump;
 use rayon::prelude::*;
 
+use crate::accel::count::NoCount;
 use crate::accel::stream::{self, Occlusions, Query};
 use crate::accel::Tracer;
 use crate::plural::count;
@@ -434,7 +435,7 @@ fn trace_stream(
         for (i, query) in rays {
             stream.push(set.light[i], query);
         }
-        let blocked = stream.trace(tracer, arena);
+        let (blocked, _) = stream.trace::<NoCount>(tracer, arena);
         for (query, &blocked) in stream.queries().iter().zip(blocked) {
             answers[query.place] = if blocked { 0.0 } else { -1.0 };
         }

@@ -20,6 +20,7 @@ use std::cell::RefCell;
 use glam::{IVec3, UVec3, Vec3};
 
 use super::bounds::prim_bounds;
+use super::count::{Count, CountLanes};
 use super::hit::{test_packet, ClosestHit};
 use super::structure::Structure;
 use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay, RayQuery, RayQuery8};
@@ -173,11 +174,18 @@ impl Grid {
 }
 
 impl Structure for Grid {
-    fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
+    fn closest<C: Count>(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery,
+        closest: &mut ClosestHit,
+        count: &mut C,
+    ) {
         Mailbox::with(self.mailbox, self.prims.len(), |mailbox| {
-            self.walk(query, closest.limit(), |cell_refs, t_exit| {
+            self.walk(query, closest.limit(), count, |cell_refs, t_exit, count| {
                 for &r in cell_refs {
                     if mailbox.first_visit(r) {
+                        count.prims(1);
                         closest.test(geometry, self.prims[r as usize], query);
                     }
                 }
@@ -191,13 +199,23 @@ impl Structure for Grid {
         });
     }
 
-    fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
+    fn occluded<C: Count>(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery,
+        t_max: f32,
+        count: &mut C,
+    ) -> bool {
         let mut blocked = false;
         Mailbox::with(self.mailbox, self.prims.len(), |mailbox| {
-            self.walk(query, t_max, |cell_refs, _| {
+            self.walk(query, t_max, count, |cell_refs, _, count| {
                 blocked = cell_refs.iter().any(|&r| {
-                    mailbox.first_visit(r)
-                        && (geometry.intersect(self.prims[r as usize], query, t_max)).is_some()
+                    mailbox.first_visit(r) && {
+                        count.prims(1);
+                        geometry
+                            .intersect(self.prims[r as usize], query, t_max)
+                            .is_some()
+                    }
                 });
                 if blocked {
                     Walk::Stop
@@ -214,32 +232,36 @@ impl Structure for Grid {
     /// same cell test its objects together, by the primitives' packet kernels (so a
     /// coherent packet tests each object once for all its rays). Mailboxing plays no
     /// part here: it changes how often an object is tested, never the answer.
-    fn closest_packet(
+    fn closest_packet<C: Count>(
         &self,
         geometry: &Geometry,
         query: &RayQuery8,
         closest: &mut [ClosestHit; 8],
+        count: &mut C::Lanes,
     ) {
         let packet = query.packet;
         let packet_inv_dir = packet.inv_dir_lanes();
         let limits = closest.each_ref().map(|c| c.limit());
-        let mut walks = self.start_walks(packet, &packet_inv_dir, &limits);
+        let mut walks = self.start_walks(packet, &packet_inv_dir, &limits, count);
         loop {
             let walking = lanes_of(&walks, |_| true);
             if walking == 0 {
                 return;
             }
             for_cell_groups(&walks, walking, |cell, lanes| {
+                let refs = self.cell_refs(cell);
+                count.leaf(lanes);
+                count.prims(lanes, refs.len() as u32);
                 if lanes.count_ones() <= SINGLE_RAY_LANES {
                     for_lanes(lanes, |k| {
                         let lane = query.lane(k);
-                        for &r in self.cell_refs(cell) {
+                        for &r in refs {
                             closest[k].test(geometry, self.prims[r as usize], &lane);
                         }
                     });
                     return;
                 }
-                for &r in self.cell_refs(cell) {
+                for &r in refs {
                     test_packet(closest, geometry, self.prims[r as usize], query, lanes);
                 }
             });
@@ -251,17 +273,22 @@ impl Structure for Grid {
                 let limit = closest[k].limit();
                 dda.t_end = dda.t_end.min(limit);
                 let stop = beyond(dda.t_exit(), limit);
-                self.step(walk, stop);
+                self.step(walk, stop, &mut || count.cell(1 << k));
             }
         }
     }
 
     /// The active lanes of `query`'s packet whose ray is blocked within its interval,
     /// walked as the closest hits are.
-    fn occluded_packet(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
+    fn occluded_packet<C: Count>(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery8,
+        count: &mut C::Lanes,
+    ) -> u8 {
         let (packet, t_max) = (query.packet, &query.packet.t_max);
         let packet_inv_dir = packet.inv_dir_lanes();
-        let mut walks = self.start_walks(packet, &packet_inv_dir, t_max);
+        let mut walks = self.start_walks(packet, &packet_inv_dir, t_max, count);
         let mut blocked = 0u8;
         loop {
             let walking = lanes_of(&walks, |_| true) & !blocked;
@@ -269,10 +296,12 @@ impl Structure for Grid {
                 return blocked;
             }
             for_cell_groups(&walks, walking, |cell, lanes| {
+                count.leaf(lanes);
                 if lanes.count_ones() <= SINGLE_RAY_LANES {
                     for_lanes(lanes, |k| {
                         let lane = query.lane(k);
                         let hit = self.cell_refs(cell).iter().any(|&r| {
+                            count.prims(1 << k, 1);
                             let prim = self.prims[r as usize];
                             geometry.intersect(prim, &lane, t_max[k]).is_some()
                         });
@@ -287,31 +316,44 @@ impl Structure for Grid {
                     if open == 0 {
                         break;
                     }
+                    count.prims(open, 1);
                     let prim = self.prims[r as usize];
                     let hits = geometry.intersect8(prim, query, F32x8::from_array(*t_max), open);
                     blocked |= hits.hit.bitmask() & open;
                 }
             });
             for (k, walk) in walks.iter_mut().enumerate() {
-                self.step(walk, blocked & (1 << k) != 0);
+                self.step(walk, blocked & (1 << k) != 0, &mut || count.cell(1 << k));
             }
         }
     }
 }
 
 impl Grid {
-    /// The 3D-DDA: calls `visit` with each cell's objects and the distance at which the
-    /// ray leaves that cell, in order along the ray, while `visit` says to continue and
-    /// the ray is within `(query.t_min, t_max)` (which `visit` may shrink).
-    fn walk(&self, query: &RayQuery, t_max: f32, mut visit: impl FnMut(&[u32], f32) -> Walk) {
+    /// The 3D-DDA: calls `visit` with each cell's objects, the distance at which the ray
+    /// leaves that cell and `count`, in order along the ray, while `visit` says to
+    /// continue and the ray is within `(query.t_min, t_max)` (which `visit` may shrink).
+    /// Counts the grid's box and each cell entered.
+    fn walk<C: Count>(
+        &self,
+        query: &RayQuery,
+        t_max: f32,
+        count: &mut C,
+        mut visit: impl FnMut(&[u32], f32, &mut C) -> Walk,
+    ) {
         let (ray, inv_dir, t_min) = (&query.ray, query.inv_dir, query.t_min);
+        if !self.refs.is_empty() {
+            count.boxes(1);
+        }
         let Some(mut dda) = Dda::start(self, ray, inv_dir, t_min, t_max) else {
             return;
         };
         loop {
+            count.cell();
             let cell_refs = self.cell_refs(dda.cell);
             if !cell_refs.is_empty() {
-                match visit(cell_refs, dda.t_exit()) {
+                count.leaf();
+                match visit(cell_refs, dda.t_exit(), count) {
                     Walk::Stop => return,
                     Walk::Continue(limit) => dda.t_end = dda.t_end.min(limit),
                 }
@@ -323,37 +365,57 @@ impl Grid {
     }
 
     /// The walks of the active lanes of `packet` within `(t_min, t_max[k])`, each in its
-    /// first cell with objects (`None` for the others, and where there is no such cell).
-    fn start_walks(
+    /// first cell with objects (`None` for the others, and where there is no such cell),
+    /// counting each lane's box test and the cells it enters.
+    fn start_walks<L: CountLanes<C>, C>(
         &self,
         packet: &RayPacket,
         inv_dir: &[Vec3; 8],
         t_max: &[f32; 8],
+        count: &mut L,
     ) -> [Option<Dda>; 8] {
         let (rays, t_min) = (packet.rays, packet.t_min);
+        if !self.refs.is_empty() {
+            count.boxes(packet.active, 1);
+        }
         std::array::from_fn(|k| {
             (packet.active & (1 << k) != 0)
                 .then(|| Dda::start(self, &rays[k], inv_dir[k], t_min, t_max[k]))
                 .flatten()
-                .and_then(|mut dda| self.skip_empty(&mut dda).then_some(dda))
+                .and_then(|mut dda| {
+                    let mut cell = || count.cell(1 << k);
+                    cell();
+                    self.skip_empty(&mut dda, &mut cell).then_some(dda)
+                })
         })
     }
 
     /// Moves `walk` (in place: a walk is some 160 bytes) past its cell to the next cell
-    /// with objects; ends it (`None`) when `stop` says so or the walk ends.
-    fn step(&self, walk: &mut Option<Dda>, stop: bool) {
+    /// with objects, calling `cell` for each cell it enters; ends it (`None`) when `stop`
+    /// says so or the walk ends.
+    fn step(&self, walk: &mut Option<Dda>, stop: bool, cell: &mut impl FnMut()) {
         if let Some(dda) = walk {
-            if stop || !dda.advance(self) || !self.skip_empty(dda) {
+            if stop || !self.advance(dda, cell) || !self.skip_empty(dda, cell) {
                 *walk = None;
             }
         }
     }
 
-    /// Walks `dda` on through empty cells; `false` when the walk ends before a cell with
-    /// objects.
-    fn skip_empty(&self, dda: &mut Dda) -> bool {
+    /// [`Dda::advance`], calling `cell` when it enters a cell.
+    #[inline]
+    fn advance(&self, dda: &mut Dda, cell: &mut impl FnMut()) -> bool {
+        let entered = dda.advance(self);
+        if entered {
+            cell();
+        }
+        entered
+    }
+
+    /// Walks `dda` on through empty cells, calling `cell` for each cell it enters;
+    /// `false` when the walk ends before a cell with objects.
+    fn skip_empty(&self, dda: &mut Dda, cell: &mut impl FnMut()) -> bool {
         while self.cell_refs(dda.cell).is_empty() {
-            if !dda.advance(self) {
+            if !self.advance(dda, cell) {
                 return false;
             }
         }

@@ -20,6 +20,7 @@
 pub mod bounds;
 pub mod bvh2;
 pub mod bvh8;
+pub mod count;
 pub mod grid;
 mod hit;
 mod none;
@@ -37,6 +38,7 @@ use crate::scene::Geometry;
 use bvh2::Bvh2;
 pub use bvh2::BvhBuild;
 use bvh8::Bvh8;
+use count::{Count, CountLanes, NoCount};
 use grid::Grid;
 use hit::test_packet;
 pub use hit::ClosestHit;
@@ -199,28 +201,47 @@ macro_rules! with_structure {
 /// Each query by the structure's own walk, or its lane-by-lane default.
 impl Structure for Accel {
     #[inline]
-    fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
-        with_structure!(self, |s| s.closest(geometry, query, closest))
+    fn closest<C: Count>(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery,
+        closest: &mut ClosestHit,
+        count: &mut C,
+    ) {
+        with_structure!(self, |s| s.closest(geometry, query, closest, count))
     }
 
     #[inline]
-    fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
-        with_structure!(self, |s| s.occluded(geometry, query, t_max))
+    fn occluded<C: Count>(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery,
+        t_max: f32,
+        count: &mut C,
+    ) -> bool {
+        with_structure!(self, |s| s.occluded(geometry, query, t_max, count))
     }
 
     #[inline]
-    fn closest_packet(
+    fn closest_packet<C: Count>(
         &self,
         geometry: &Geometry,
         query: &RayQuery8,
         closest: &mut [ClosestHit; 8],
+        count: &mut C::Lanes,
     ) {
-        with_structure!(self, |s| s.closest_packet(geometry, query, closest))
+        with_structure!(self, |s| s
+            .closest_packet::<C>(geometry, query, closest, count))
     }
 
     #[inline]
-    fn occluded_packet(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
-        with_structure!(self, |s| s.occluded_packet(geometry, query))
+    fn occluded_packet<C: Count>(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery8,
+        count: &mut C::Lanes,
+    ) -> u8 {
+        with_structure!(self, |s| s.occluded_packet::<C>(geometry, query, count))
     }
 }
 
@@ -277,41 +298,72 @@ impl<'s> Tracer<'s> {
     }
 
     /// The closest hit with `t` in `(t_min, t_max)`.
+    #[inline]
     pub fn closest(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        self.closest_counting(ray, t_min, t_max, &mut NoCount)
+    }
+
+    /// [`Tracer::closest`], its work counted into `count`.
+    pub fn closest_counting<C: Count>(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        count: &mut C,
+    ) -> Option<Hit> {
         if !ray.is_traceable() {
             return None;
         }
         let query = RayQuery::new(ray, t_min, self.options);
         let mut closest = ClosestHit::new(t_max);
-        self.accel.closest(self.geometry, &query, &mut closest);
-        self.nearer_plane(&query, t_max, closest.hit())
-    }
-
-    /// The closest hit among the planes and `bounded`, the accelerator's. Planes come
-    /// last in id order, so a plane at the same `t` loses the tie.
-    fn nearer_plane(&self, query: &RayQuery, t_max: f32, bounded: Option<Hit>) -> Option<Hit> {
+        self.accel
+            .closest(self.geometry, &query, &mut closest, count);
+        let bounded = closest.hit();
+        // Planes come last in id order, so a plane at the same `t` loses the tie.
         let t_max = bounded.map_or(t_max, |h| h.t);
-        self.closest_plane(query, t_max).or(bounded)
+        self.closest_plane(&query, t_max, count).or(bounded)
     }
 
     /// Whether anything blocks the ray within `(t_min, t_max)`.
+    #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.occluded_counting(ray, t_min, t_max, &mut NoCount)
+    }
+
+    /// [`Tracer::occluded`], its work counted into `count`.
+    pub fn occluded_counting<C: Count>(
+        &self,
+        ray: &Ray,
+        t_min: f32,
+        t_max: f32,
+        count: &mut C,
+    ) -> bool {
         if !ray.is_traceable() {
             return false;
         }
         let query = RayQuery::new(ray, t_min, self.options);
-        self.closest_plane(&query, t_max).is_some()
-            || self.accel.occluded(self.geometry, &query, t_max)
+        self.closest_plane(&query, t_max, count).is_some()
+            || self.accel.occluded(self.geometry, &query, t_max, count)
     }
 
     /// The closest hit of each active lane of `packet` within its interval; `None` for
     /// the other lanes. The same hits as [`Tracer::closest`] gives each ray; the 8-wide
     /// BVH and the grid trace them as one packet, and the planes are tested eight rays at
     /// a time.
+    #[inline]
     pub fn closest_packet(&self, packet: &RayPacket) -> [Option<Hit>; 8] {
+        self.closest_packet_counting::<NoCount>(packet, &mut NoCount)
+    }
+
+    /// [`Tracer::closest_packet`], each lane's work counted into its lane of `count`.
+    pub fn closest_packet_counting<C: Count>(
+        &self,
+        packet: &RayPacket,
+        count: &mut C::Lanes,
+    ) -> [Option<Hit>; 8] {
         let active = packet.active & packet.traceable();
         if active != packet.active {
-            return self.closest_packet(&packet.with_active(active));
+            return self.closest_packet_counting::<C>(&packet.with_active(active), count);
         }
         let mut closest = packet.t_max.map(ClosestHit::new);
         let query = RayQuery8 {
@@ -319,9 +371,9 @@ impl<'s> Tracer<'s> {
             options: self.options,
         };
         self.accel
-            .closest_packet(self.geometry, &query, &mut closest);
-        // As `nearer_plane` for each lane: a plane must be closer than the structure's hit.
-        let planes = self.closest_planes(&query, active, closest.map(|c| c.limit()));
+            .closest_packet::<C>(self.geometry, &query, &mut closest, count);
+        // As `closest` for each lane: a plane must be closer than the structure's hit.
+        let planes = self.closest_planes(&query, active, closest.map(|c| c.limit()), count);
         let bounded = closest.map(|c| c.hit());
         std::array::from_fn(|k| {
             (active & (1 << k) != 0)
@@ -333,24 +385,44 @@ impl<'s> Tracer<'s> {
     /// The active lanes of `packet` whose ray is blocked within its interval, as a bit
     /// mask: the answers of [`Tracer::occluded`], traced as one packet by the 8-wide BVH
     /// and the grid.
+    #[inline]
     pub fn occluded_packet(&self, packet: &RayPacket) -> u8 {
+        self.occluded_packet_counting::<NoCount>(packet, &mut NoCount)
+    }
+
+    /// [`Tracer::occluded_packet`], each lane's work counted into its lane of `count`.
+    pub fn occluded_packet_counting<C: Count>(
+        &self,
+        packet: &RayPacket,
+        count: &mut C::Lanes,
+    ) -> u8 {
         let active = packet.active & packet.traceable();
         let options = self.options;
-        let planes = self.closest_planes(&RayQuery8 { packet, options }, active, packet.t_max);
+        let query = RayQuery8 { packet, options };
+        let planes = self.closest_planes(&query, active, packet.t_max, count);
         let by_plane = lane_mask(|k| planes[k].is_some());
         let rest = packet.with_active(active & !by_plane);
         let query = RayQuery8 {
             packet: &rest,
             options,
         };
-        by_plane | self.accel.occluded_packet(self.geometry, &query)
+        by_plane
+            | self
+                .accel
+                .occluded_packet::<C>(self.geometry, &query, count)
     }
 
     /// [`Tracer::closest_plane`] for the lanes `lanes` of `query`'s packet, each within
     /// `(t_min, t_max[k])`: each plane against the eight rays at once by its packet
     /// kernel, which answers each lane as the scalar test does
     /// (`tests/integration/simd.rs`).
-    fn closest_planes(&self, query: &RayQuery8, lanes: u8, t_max: [f32; 8]) -> [Option<Hit>; 8] {
+    fn closest_planes<C>(
+        &self,
+        query: &RayQuery8,
+        lanes: u8,
+        t_max: [f32; 8],
+        count: &mut impl CountLanes<C>,
+    ) -> [Option<Hit>; 8] {
         if PrimKind::UNBOUNDED
             .iter()
             .all(|&kind| self.geometry.count(kind) == 0)
@@ -359,6 +431,7 @@ impl<'s> Tracer<'s> {
         }
         let mut closest = t_max.map(ClosestHit::new);
         for kind in PrimKind::UNBOUNDED {
+            count.prims(lanes, self.geometry.count(kind) as u32);
             for prim in self.geometry.ids(kind) {
                 test_packet(&mut closest, self.geometry, prim, query, lanes);
             }
@@ -367,9 +440,10 @@ impl<'s> Tracer<'s> {
     }
 
     /// The closest hit among the unbounded primitives (planes), which no structure holds.
-    fn closest_plane(&self, query: &RayQuery, t_max: f32) -> Option<Hit> {
+    fn closest_plane(&self, query: &RayQuery, t_max: f32, count: &mut impl Count) -> Option<Hit> {
         let mut closest = ClosestHit::new(t_max);
         for kind in PrimKind::UNBOUNDED {
+            count.prims(self.geometry.count(kind) as u32);
             for prim in self.geometry.ids(kind) {
                 closest.test(self.geometry, prim, query);
             }

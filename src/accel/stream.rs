@@ -10,12 +10,15 @@
 //! traces a packet as soon as it is full: the renderer's shadow rays, made light by light,
 //! go to one directly, and [`Occlusions`] keeps one for each light.
 //! What the other groupings cost, by end point and by direction octant, is in
-//! BENCHMARKS.md ("What did not pay").
+//! BENCHMARKS.md ("What did not pay"). Each query's work comes back with its answer when
+//! the stream is traced with a [`Count`] that counts ([`closest_counting`],
+//! [`Occlusions::trace`]); [`NoCount`] hands back nothing.
 
 use bumpalo::collections::Vec as ArenaVec;
 use bumpalo::Bump;
 use glam::Vec3;
 
+use super::count::{Count, CountLanes, NoCount};
 use super::Tracer;
 use crate::ray::{Hit, Ray, RayPacket};
 use crate::simd::for_lanes;
@@ -56,10 +59,25 @@ pub fn closest<Q: Query>(
     queries: impl IntoIterator<Item = Q>,
     mut hits: impl FnMut(&[Q], &[Option<Hit>]),
 ) {
+    closest_counting::<Q, NoCount>(tracer, queries, |lanes, found, _| hits(lanes, found));
+}
+
+/// [`closest`], with each packet's work lane by lane.
+pub fn closest_counting<Q: Query, C: Count>(
+    tracer: &Tracer,
+    queries: impl IntoIterator<Item = Q>,
+    mut hits: impl FnMut(&[Q], &[Option<Hit>], &C::Lanes),
+) {
     packets(
         queries,
-        |packet| tracer.closest_packet(packet),
-        |lanes, found| hits(lanes, &found[..lanes.len()]),
+        |packet| {
+            let mut count = C::Lanes::default();
+            (
+                tracer.closest_packet_counting::<C>(packet, &mut count),
+                count,
+            )
+        },
+        |lanes, (found, count)| hits(lanes, &found[..lanes.len()], &count),
     );
 }
 
@@ -96,22 +114,44 @@ impl<'a, Q: Query> Occlusions<'a, Q> {
         &self.queries
     }
 
-    /// Whether each query is blocked, by index: the queries in their order, each light's
-    /// packed by a [`Packer`] of its own, so that nothing is sorted (a counting sort of
-    /// their indices by light was 12% of the instructions of the dragon's shadow rays).
+    /// Whether each query is blocked, and its work, by index: the queries in their
+    /// order, each light's packed by a [`Packer`] of its own, so that nothing is sorted (a
+    /// counting sort of their indices by light was 12% of the instructions of the
+    /// dragon's shadow rays).
     #[inline(never)]
-    pub fn trace(&self, tracer: &Tracer, arena: &'a Bump) -> &'a [bool] {
+    pub fn trace<C: Count>(&self, tracer: &Tracer, arena: &'a Bump) -> (&'a [bool], &'a [C]) {
         let blocked = arena.alloc_slice_fill_copy(self.queries.len(), false);
-        let mut mark = |i: u32| blocked[i as usize] = true;
+        let counts = arena.alloc_slice_fill_copy(self.queries.len(), C::default());
+        let mut answer = Answers {
+            blocked: |i: u32| blocked[i as usize] = true,
+            counted: |i: u32, count: C| counts[i as usize] = count,
+        };
         let mut packers =
             ArenaVec::from_iter_in((0..self.lights).map(|_| Packer::new(tracer)), arena);
         for (i, (query, &light)) in self.queries.iter().zip(&self.light).enumerate() {
-            packers[light as usize].push(query.ray(), query.t_max(), i as u32, &mut mark);
+            packers[light as usize].push(query.ray(), query.t_max(), i as u32, &mut answer);
         }
         for packer in &mut packers {
-            packer.flush(&mut mark);
+            packer.flush(&mut answer);
         }
-        blocked
+        (blocked, counts)
+    }
+}
+
+/// What a [`Packer`] hands back of a traced packet: `blocked` takes the tag of each query
+/// that is blocked, `counted` each query's tag and work (only where `C` counts).
+pub struct Answers<B, K> {
+    pub blocked: B,
+    pub counted: K,
+}
+
+/// [`Answers`] that take the blocked queries alone.
+impl<T, B: FnMut(T)> Answers<B, fn(T, NoCount)> {
+    pub fn blocked(blocked: B) -> Self {
+        Answers {
+            blocked,
+            counted: |_, _| {},
+        }
     }
 }
 
@@ -119,15 +159,16 @@ impl<'a, Q: Query> Occlusions<'a, Q> {
 /// through [`Tracer::occluded_packet`] as soon as it is full (or flushed), the tags of its
 /// blocked queries handed back. A stream grouped by light goes through it directly;
 /// [`Occlusions`] keeps one for each light.
-pub struct Packer<'t, T> {
+pub struct Packer<'t, T, C = NoCount> {
     tracer: &'t Tracer<'t>,
     rays: [Ray; 8],
     t_max: [f32; 8],
     tags: [T; 8],
     len: usize,
+    count: std::marker::PhantomData<C>,
 }
 
-impl<'t, T: Copy + Default> Packer<'t, T> {
+impl<'t, T: Copy + Default, C: Count> Packer<'t, T, C> {
     pub fn new(tracer: &'t Tracer<'t>) -> Self {
         Packer {
             tracer,
@@ -135,24 +176,31 @@ impl<'t, T: Copy + Default> Packer<'t, T> {
             t_max: [0.0; 8],
             tags: [T::default(); 8],
             len: 0,
+            count: std::marker::PhantomData,
         }
     }
 
     /// Adds the query along `ray` within `(0, t_max)`, tagged `tag`; when that fills a
-    /// packet, traces it and gives `blocked` the tags of the queries that are.
+    /// packet, traces it and gives `answer` what it found.
     #[inline(always)]
-    pub fn push(&mut self, ray: &Ray, t_max: f32, tag: T, blocked: &mut impl FnMut(T)) {
+    pub fn push<B: FnMut(T), K: FnMut(T, C)>(
+        &mut self,
+        ray: &Ray,
+        t_max: f32,
+        tag: T,
+        answer: &mut Answers<B, K>,
+    ) {
         let k = self.len;
         (self.rays[k], self.t_max[k], self.tags[k]) = (*ray, t_max, tag);
         self.len += 1;
         if self.len == 8 {
-            self.flush(blocked);
+            self.flush(answer);
         }
     }
 
     /// Traces the queries added since the last packet; a partial packet's missing lanes
     /// repeat its first query and are inactive.
-    pub fn flush(&mut self, blocked: &mut impl FnMut(T)) {
+    pub fn flush<B: FnMut(T), K: FnMut(T, C)>(&mut self, answer: &mut Answers<B, K>) {
         let n = self.len;
         if n == 0 {
             return;
@@ -160,12 +208,19 @@ impl<'t, T: Copy + Default> Packer<'t, T> {
         for k in n..8 {
             (self.rays[k], self.t_max[k]) = (self.rays[0], self.t_max[0]);
         }
+        let active = (1u16 << n).wrapping_sub(1) as u8;
         let packet = RayPacket::new(&self.rays)
             .with_t_max(self.t_max)
-            .with_active((1u16 << n).wrapping_sub(1) as u8);
-        for_lanes(self.tracer.occluded_packet(&packet), |k| {
-            blocked(self.tags[k])
-        });
+            .with_active(active);
+        let mut count = C::Lanes::default();
+        for_lanes(
+            self.tracer
+                .occluded_packet_counting::<C>(&packet, &mut count),
+            |k| (answer.blocked)(self.tags[k]),
+        );
+        if C::ON {
+            for_lanes(active, |k| (answer.counted)(self.tags[k], count.lane(k)));
+        }
         self.len = 0;
     }
 }

@@ -20,7 +20,7 @@ use glam::Vec3;
 use super::light::Receiver;
 use super::sampler::Sample;
 use super::shade::{Bounce8, Optics8, Phong8, Profile, RayCounts, RayKind, Shader, EPS};
-use crate::accel::stream;
+use crate::accel::stream::{self, Answers};
 use crate::intersect::spawn_origin8;
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{Hit, Ray};
@@ -409,11 +409,16 @@ impl<'a> ShadowQueue<'a> {
                     // The ray's entry (light and block) and lane, for `unlit`.
                     let tag = entry << 3 | k as u32;
                     let distance = incident.distance.lane(k);
-                    packer.push(&ray, distance, tag, &mut |tag| unlit(&mut lit, tag));
+                    packer.push(
+                        &ray,
+                        distance,
+                        tag,
+                        &mut Answers::blocked(|tag| unlit(&mut lit, tag)),
+                    );
                 });
             }
         }
-        packer.flush(&mut |tag| unlit(&mut lit, tag));
+        packer.flush(&mut Answers::blocked(|tag| unlit(&mut lit, tag)));
         ShadowQueue {
             lights,
             dir,

@@ -5,10 +5,12 @@ use crate::common;
 
 use bumpalo::Bump;
 use glam::Vec3;
+use p3trace::accel::count::{LaneTallies, NoCount, Tally};
 use p3trace::accel::stream::{self, Occlusions, Query};
 use p3trace::accel::{AccelKind, AccelOptions, Tracer};
 use p3trace::accel::{BvhBuild, BvhWidth};
 use p3trace::intersect::{self, IntersectOptions, SphereRoots};
+use p3trace::prim::PrimKind;
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::{render, RenderOptions};
 use p3trace::scene::p3f::parse_text;
@@ -255,7 +257,7 @@ proptest! {
 
     /// Packets change how rays travel, never what they find: each lane of every
     /// structure's packet queries answers as brute force does for that ray alone, and
-    /// idle lanes answer nothing.
+    /// idle lanes answer nothing. Counting the walks' work changes nothing either.
     #[test]
     fn packets_answer_as_single_rays(
         scene in scene(),
@@ -270,6 +272,9 @@ proptest! {
                 let packet = RayPacket::new(rays).with_t_max(*t_max).with_active(*active);
                 let hits = tracer.closest_packet(&packet);
                 let blocked = tracer.occluded_packet(&packet);
+                let mut counts = LaneTallies::default();
+                prop_assert_eq!(tracer.closest_packet_counting::<Tally>(&packet, &mut counts), hits);
+                prop_assert_eq!(tracer.occluded_packet_counting::<Tally>(&packet, &mut counts), blocked);
                 for k in 0..8 {
                     let on = active & (1 << k) != 0;
                     let expected = if on { brute.closest(&rays[k], 0.0, t_max[k]) } else { None };
@@ -299,11 +304,15 @@ proptest! {
                     let expected = brute.closest(ray, t_min, *t_max);
                     let got = tracer.closest(ray, t_min, *t_max);
                     prop_assert_eq!(got, expected, "{} closest, {:?} t_max {}", name, ray, t_max);
+                    let blocked = brute.occluded(ray, t_min, *t_max);
                     prop_assert_eq!(
-                        tracer.occluded(ray, t_min, *t_max),
-                        brute.occluded(ray, t_min, *t_max),
+                        tracer.occluded(ray, t_min, *t_max), blocked,
                         "{} occluded, {:?} t_max {}", name, ray, t_max
                     );
+                    // The counted walks find what the uncounted ones do.
+                    let mut count = Tally::default();
+                    prop_assert_eq!(tracer.closest_counting(ray, t_min, *t_max, &mut count), got);
+                    prop_assert_eq!(tracer.occluded_counting(ray, t_min, *t_max, &mut count), blocked);
                 }
             }
         }
@@ -376,9 +385,23 @@ proptest! {
             for &(query, light) in &queries {
                 occlusions.push(light, query);
             }
-            let blocked = occlusions.trace(&tracer, &arena);
+            let (blocked, _) = occlusions.trace::<NoCount>(&tracer, &arena);
             prop_assert_eq!(hits.len(), queries.len());
             prop_assert_eq!(blocked.len(), queries.len());
+            // Counted, the stream answers the same, and counts the work of every query.
+            let mut counted_hits = Vec::new();
+            stream::closest_counting::<_, Tally>(&tracer, queries.iter().map(|&(q, _)| q), |_, found, _| {
+                counted_hits.extend_from_slice(found)
+            });
+            prop_assert_eq!(&counted_hits, &hits);
+            let (counted_blocked, counts) = occlusions.trace::<Tally>(&tracer, &arena);
+            prop_assert_eq!(counted_blocked, blocked);
+            for (k, &(Bounded(ray, _), _)) in queries.iter().enumerate() {
+                // A traceable ray tests the planes at least, where there are any.
+                if ray.is_traceable() && g.count(PrimKind::Plane) > 0 {
+                    prop_assert!(counts[k].prims > 0, "{} query {} counted nothing", name, k);
+                }
+            }
             for (k, &(Bounded(ray, t_max), light)) in queries.iter().enumerate() {
                 prop_assert_eq!(
                     hits[k], brute.closest(&ray, 0.0, t_max),

@@ -8,6 +8,7 @@ mod accel;
 mod adversarial;
 mod bench_chart;
 mod cli;
+mod counts;
 mod docs;
 mod effects;
 mod farm;

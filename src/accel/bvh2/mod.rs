@@ -18,6 +18,7 @@ mod build;
 
 use glam::Vec3;
 
+use super::count::Count;
 use super::hit::ClosestHit;
 use super::stack::Stack;
 use super::structure::Structure;
@@ -172,11 +173,18 @@ impl Bvh2 {
 }
 
 impl Structure for Bvh2 {
-    fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
+    fn closest<C: Count>(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery,
+        closest: &mut ClosestHit,
+        count: &mut C,
+    ) {
         let Some(root) = self.nodes.first() else {
             return;
         };
         let (t_min, box_ray) = (query.t_min, BoxRay::new(query.ray.origin, query.inv_dir));
+        count.boxes(1);
         let Some(t_root) = root.entry(&box_ray, t_min, closest.limit()) else {
             return;
         };
@@ -190,12 +198,16 @@ impl Structure for Bvh2 {
             loop {
                 let node = &self.nodes[index as usize];
                 if node.count > 0 {
+                    count.leaf();
+                    count.prims(node.count);
                     let first = node.offset as usize;
                     for &prim in &self.prims[first..first + node.count as usize] {
                         closest.test(geometry, prim, query);
                     }
                     break;
                 }
+                count.node();
+                count.boxes(2);
                 let (left, right) = (index + 1, node.offset);
                 let limit = closest.limit();
                 let t_left = self.nodes[left as usize].entry(&box_ray, t_min, limit);
@@ -218,7 +230,14 @@ impl Structure for Bvh2 {
         }
     }
 
-    fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
+    /// Each popped node's own box is tested: its children are pushed unsorted.
+    fn occluded<C: Count>(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery,
+        t_max: f32,
+        count: &mut C,
+    ) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
@@ -227,18 +246,24 @@ impl Structure for Bvh2 {
         stack.push(0);
         while let Some(index) = stack.pop() {
             let node = &self.nodes[index as usize];
+            count.boxes(1);
             if node.entry(&box_ray, t_min, t_max).is_none() {
                 continue;
             }
             if node.count > 0 {
+                count.leaf();
                 let first = node.offset as usize;
                 let blocked = self.prims[first..first + node.count as usize]
                     .iter()
-                    .any(|&prim| geometry.intersect(prim, query, t_max).is_some());
+                    .any(|&prim| {
+                        count.prims(1);
+                        geometry.intersect(prim, query, t_max).is_some()
+                    });
                 if blocked {
                     return true;
                 }
             } else {
+                count.node();
                 stack.push(node.offset);
                 stack.push(index + 1);
             }

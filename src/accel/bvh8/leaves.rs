@@ -5,6 +5,7 @@
 //! is written once, over [`LeafPack`], so that the tree names no kind.
 
 use super::node::{leaf_parts, leaf_ref, pack_code, ChildRef};
+use crate::accel::count::CountLanes;
 use crate::accel::hit::ClosestHit;
 use crate::intersect::{LeafPack, RayQuery, RayQuery8};
 use crate::prim::{packed_kinds, PrimId, PrimKind};
@@ -68,13 +69,16 @@ impl<K: LeafPack> Packs<K> {
     /// inlined into the packet walks cost `bench` 0.8% more instructions, and a call per
     /// pack leaf costs less.
     #[inline(never)]
-    fn closest_packet(
+    fn closest_packet<C>(
         &self,
         (index, count): (usize, usize),
         query: &RayQuery8,
         lanes: u8,
         closest: &mut [ClosestHit; 8],
+        counted: &mut impl CountLanes<C>,
     ) {
+        counted.leaf(lanes);
+        counted.prims(lanes, count as u32);
         let (pack, ids) = (&self.packs[index], &self.ids[index]);
         // Each lane's bound, renewed in the lanes a primitive hits (not gathered again
         // from all eight: that was a fifth of this loop's instructions).
@@ -100,12 +104,20 @@ impl<K: LeafPack> Packs<K> {
     /// The lanes of `lanes` that a primitive of pack `index`, which holds `count`,
     /// blocks within the packet's interval, one primitive against every lane at a time.
     #[inline(never)]
-    fn blocks_packet(&self, (index, count): (usize, usize), query: &RayQuery8, lanes: u8) -> u8 {
+    fn blocks_packet<C>(
+        &self,
+        (index, count): (usize, usize),
+        query: &RayQuery8,
+        lanes: u8,
+        counted: &mut impl CountLanes<C>,
+    ) -> u8 {
+        counted.leaf(lanes);
         let pack = &self.packs[index];
         let t_max = F32x8::from_array(query.packet.t_max);
         let mut blocked = 0;
         for slot in 0..count {
             let open = lanes & !blocked;
+            counted.prims(open, 1);
             let hits = K::slot8(pack, slot, query, t_max, open);
             blocked |= hits.hit.bitmask();
             if blocked == lanes {
@@ -190,18 +202,19 @@ macro_rules! define_leaves {
             /// 8-lane tests than testing each lane against every slot. `false`
             /// otherwise, the lanes left untested.
             #[inline(always)]
-            pub fn closest_packet(
+            pub fn closest_packet<C>(
                 &self,
                 child: ChildRef,
                 query: &RayQuery8,
                 lanes: u8,
                 closest: &mut [ClosestHit; 8],
+                counted: &mut impl CountLanes<C>,
             ) -> bool {
                 let (code, count, index) = leaf_parts(child);
                 let fewer = count < lanes.count_ones() as usize;
                 match code {
                     $(c if fewer && c == const { pack_code(PrimKind::$kind) } => {
-                        self.$field.closest_packet((index, count), query, lanes, closest);
+                        self.$field.closest_packet((index, count), query, lanes, closest, counted);
                         true
                     })*
                     _ => false,
@@ -213,12 +226,18 @@ macro_rules! define_leaves {
             /// has lanes (as [`Leaves::closest_packet`]); `None` otherwise, the lanes left
             /// untested.
             #[inline(always)]
-            pub fn blocks_packet(&self, child: ChildRef, query: &RayQuery8, lanes: u8) -> Option<u8> {
+            pub fn blocks_packet<C>(
+                &self,
+                child: ChildRef,
+                query: &RayQuery8,
+                lanes: u8,
+                counted: &mut impl CountLanes<C>,
+            ) -> Option<u8> {
                 let (code, count, index) = leaf_parts(child);
                 let fewer = count < lanes.count_ones() as usize;
                 match code {
                     $(c if fewer && c == const { pack_code(PrimKind::$kind) } => {
-                        Some(self.$field.blocks_packet((index, count), query, lanes))
+                        Some(self.$field.blocks_packet((index, count), query, lanes, counted))
                     })*
                     _ => None,
                 }

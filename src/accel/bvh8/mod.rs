@@ -18,6 +18,7 @@ mod packet;
 mod traverse;
 
 use super::bvh2::{Bvh2Stats, BvhBuild};
+use super::count::Count;
 use super::hit::ClosestHit;
 use super::structure::Structure;
 use crate::intersect::{RayQuery, RayQuery8};
@@ -47,30 +48,48 @@ const STACK_SIZE: usize = (WIDTH - 1) * super::bvh2::MAX_DEPTH + 1;
 /// The walks from the root: one ray's in `traverse.rs`, a packet's in `packet.rs`.
 impl Structure for Bvh8 {
     #[inline]
-    fn closest(&self, geometry: &Geometry, query: &RayQuery, closest: &mut ClosestHit) {
+    fn closest<C: Count>(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery,
+        closest: &mut ClosestHit,
+        count: &mut C,
+    ) {
         if !self.nodes.is_empty() {
-            self.closest_from(0, geometry, query, closest);
+            self.closest_from(0, geometry, query, closest, count);
         }
     }
 
     #[inline]
-    fn occluded(&self, geometry: &Geometry, query: &RayQuery, t_max: f32) -> bool {
-        !self.nodes.is_empty() && self.occluded_from(0, geometry, query, t_max)
+    fn occluded<C: Count>(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery,
+        t_max: f32,
+        count: &mut C,
+    ) -> bool {
+        !self.nodes.is_empty() && self.occluded_from(0, geometry, query, t_max, count)
     }
 
     #[inline]
-    fn closest_packet(
+    fn closest_packet<C: Count>(
         &self,
         geometry: &Geometry,
         query: &RayQuery8,
         closest: &mut [ClosestHit; 8],
+        count: &mut C::Lanes,
     ) {
-        self.packet_closest(geometry, query, closest);
+        self.packet_closest::<C>(geometry, query, closest, count);
     }
 
     #[inline]
-    fn occluded_packet(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
-        self.packet_occluded(geometry, query)
+    fn occluded_packet<C: Count>(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery8,
+        count: &mut C::Lanes,
+    ) -> u8 {
+        self.packet_occluded::<C>(geometry, query, count)
     }
 }
 

@@ -8,6 +8,7 @@
 
 use super::node::{ChildRef, Node8, LEAF};
 use super::{Bvh8, STACK_SIZE};
+use crate::accel::count::{Count, CountLanes};
 use crate::accel::hit::ClosestHit;
 use crate::accel::stack::Stack;
 use crate::intersect::{beyond8, BoxRay8, RayQuery8, RayRange};
@@ -24,11 +25,12 @@ impl Bvh8 {
     /// entry on the stack. An entry is skipped when it lies beyond every lane's closest
     /// hit; a subtree left with few lanes is finished one ray at a time. Each lane's
     /// answer is the one single-ray walk ([`Bvh8::closest_from`]) gives.
-    pub(super) fn packet_closest(
+    pub(super) fn packet_closest<C: Count>(
         &self,
         geometry: &Geometry,
         query: &RayQuery8,
         closest: &mut [ClosestHit; 8],
+        count: &mut C::Lanes,
     ) {
         let packet = query.packet;
         let (active, t_min) = (packet.active, packet.t_min);
@@ -50,24 +52,31 @@ impl Bvh8 {
                 continue;
             }
             let leaf = child & LEAF != 0;
-            if leaf && self.leaves.closest_packet(child, query, lanes, closest) {
+            if leaf
+                && self
+                    .leaves
+                    .closest_packet(child, query, lanes, closest, count)
+            {
                 limit = lanes_of(closest, ClosestHit::limit);
                 continue;
             }
             if leaf || lanes.count_ones() <= SINGLE_RAY_LANES {
                 for_lanes(lanes, |k| {
-                    let lane = query.lane(k);
+                    let (lane, mut counted) = (query.lane(k), C::default());
                     if leaf {
-                        self.closest_in_leaf(geometry, child, &lane, &mut closest[k]);
+                        self.closest_in_leaf(geometry, child, &lane, &mut closest[k], &mut counted);
                     } else {
-                        self.closest_from(child, geometry, &lane, &mut closest[k]);
+                        self.closest_from(child, geometry, &lane, &mut closest[k], &mut counted);
                     }
+                    count.add_lane(k, &counted);
                 });
                 limit = lanes_of(closest, ClosestHit::limit);
                 continue;
             }
             let node = &self.nodes[child as usize];
             let candidates = candidates(node, range.as_ref(), t_min, range_limit);
+            count.node(lanes);
+            count.boxes(lanes, candidates.count_ones());
             let kept = Mask8::from_bitmask(lanes);
             // (child, its lanes, the nearest lane's entry) for the children entered, sorted
             // on the stack with the nearest on top to be popped next.
@@ -87,7 +96,12 @@ impl Bvh8 {
 
     /// The active lanes of `query`'s packet whose ray is blocked within its interval, as
     /// a bit mask, the rays traced together as in [`Bvh8::packet_closest`].
-    pub(super) fn packet_occluded(&self, geometry: &Geometry, query: &RayQuery8) -> u8 {
+    pub(super) fn packet_occluded<C: Count>(
+        &self,
+        geometry: &Geometry,
+        query: &RayQuery8,
+        count: &mut C::Lanes,
+    ) -> u8 {
         let packet = query.packet;
         let (active, t_min, t_max) = (packet.active, packet.t_min, &packet.t_max);
         if self.nodes.is_empty() || active == 0 {
@@ -107,7 +121,7 @@ impl Bvh8 {
             }
             let leaf = child & LEAF != 0;
             let in_pack = if leaf {
-                self.leaves.blocks_packet(child, query, lanes)
+                self.leaves.blocks_packet(child, query, lanes, count)
             } else {
                 None
             };
@@ -120,12 +134,13 @@ impl Bvh8 {
             }
             if leaf || lanes.count_ones() <= SINGLE_RAY_LANES {
                 for_lanes(lanes, |k| {
-                    let lane = query.lane(k);
+                    let (lane, mut counted) = (query.lane(k), C::default());
                     let hit = if leaf {
-                        self.blocks(geometry, child, &lane, t_max[k])
+                        self.blocks(geometry, child, &lane, t_max[k], &mut counted)
                     } else {
-                        self.occluded_from(child, geometry, &lane, t_max[k])
+                        self.occluded_from(child, geometry, &lane, t_max[k], &mut counted)
                     };
+                    count.add_lane(k, &counted);
                     if hit {
                         blocked |= 1 << k;
                     }
@@ -137,6 +152,8 @@ impl Bvh8 {
             }
             let node = &self.nodes[child as usize];
             let candidates = candidates(node, range.as_ref(), t_min, range_limit);
+            count.node(lanes);
+            count.boxes(lanes, candidates.count_ones());
             for_lanes(candidates, |c| {
                 let (min, max) = node.boxes.corners(c);
                 let intervals = box_rays.interval(min, max, lanes_t_min, lanes_t_max);

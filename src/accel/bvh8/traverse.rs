@@ -3,6 +3,7 @@
 
 use super::node::{leaf_parts, ChildRef, LEAF};
 use super::{Bvh8, STACK_SIZE};
+use crate::accel::count::Count;
 use crate::accel::hit::ClosestHit;
 use crate::accel::stack::Stack;
 use crate::intersect::{beyond, BoxRay, RayQuery};
@@ -12,15 +13,18 @@ use crate::simd::for_lanes;
 impl Bvh8 {
     /// Tests the primitives of leaf `child`, keeping the winner in `closest`.
     #[inline]
-    pub(super) fn closest_in_leaf(
+    pub(super) fn closest_in_leaf<C: Count>(
         &self,
         geometry: &Geometry,
         child: ChildRef,
         query: &RayQuery,
         closest: &mut ClosestHit,
+        counted: &mut C,
     ) {
+        let (_, count, index) = leaf_parts(child);
+        counted.leaf();
+        counted.prims(count as u32);
         if !self.leaves.closest(child, query, closest) {
-            let (_, count, index) = leaf_parts(child);
             for &prim in &self.prims[index..index + count] {
                 closest.test(geometry, prim, query);
             }
@@ -29,31 +33,37 @@ impl Bvh8 {
 
     /// Whether a primitive of leaf `child` blocks `query` within `(t_min, t_max)`.
     #[inline]
-    pub(super) fn blocks(
+    pub(super) fn blocks<C: Count>(
         &self,
         geometry: &Geometry,
         child: ChildRef,
         query: &RayQuery,
         t_max: f32,
+        counted: &mut C,
     ) -> bool {
-        let in_pack = self.leaves.blocks(child, query, t_max);
-        in_pack.unwrap_or_else(|| {
-            let (_, count, index) = leaf_parts(child);
-            let prims = &self.prims[index..index + count];
-            prims
-                .iter()
-                .any(|&prim| geometry.intersect(prim, query, t_max).is_some())
-        })
+        let (_, count, index) = leaf_parts(child);
+        counted.leaf();
+        match self.leaves.blocks(child, query, t_max) {
+            Some(blocked) => {
+                counted.prims(count as u32);
+                blocked
+            }
+            None => self.prims[index..index + count].iter().any(|&prim| {
+                counted.prims(1);
+                geometry.intersect(prim, query, t_max).is_some()
+            }),
+        }
     }
 
     /// The closest hit of `query` in the subtree under `start`, offered to `closest`.
     #[inline]
-    pub(super) fn closest_from(
+    pub(super) fn closest_from<C: Count>(
         &self,
         start: ChildRef,
         geometry: &Geometry,
         query: &RayQuery,
         closest: &mut ClosestHit,
+        count: &mut C,
     ) {
         let (t_min, box_ray) = (query.t_min, BoxRay::new(query.ray.origin, query.inv_dir));
         let mut stack = Stack::<(ChildRef, f32), STACK_SIZE>::new();
@@ -64,10 +74,12 @@ impl Bvh8 {
                 continue;
             }
             if child & LEAF != 0 {
-                self.closest_in_leaf(geometry, child, query, closest);
+                self.closest_in_leaf(geometry, child, query, closest, count);
                 continue;
             }
             let node = &self.nodes[child as usize];
+            count.node();
+            count.boxes(node.count);
             let (hits, entries) = node.entries(&box_ray, t_min, closest.limit());
             // The hit children sorted on the stack, the nearest on top to be popped next.
             let floor = stack.len();
@@ -80,24 +92,27 @@ impl Bvh8 {
     /// Whether a primitive of the subtree under `start` blocks `query` within
     /// `(query.t_min, t_max)`.
     #[inline(always)]
-    pub(super) fn occluded_from(
+    pub(super) fn occluded_from<C: Count>(
         &self,
         start: ChildRef,
         geometry: &Geometry,
         query: &RayQuery,
         t_max: f32,
+        count: &mut C,
     ) -> bool {
         let (t_min, box_ray) = (query.t_min, BoxRay::new(query.ray.origin, query.inv_dir));
         let mut stack = Stack::<ChildRef, STACK_SIZE>::new();
         let mut next = Some(start);
         while let Some(child) = next.take().or_else(|| stack.pop()) {
             if child & LEAF != 0 {
-                if self.blocks(geometry, child, query, t_max) {
+                if self.blocks(geometry, child, query, t_max, count) {
                     return true;
                 }
                 continue;
             }
             let node = &self.nodes[child as usize];
+            count.node();
+            count.boxes(node.count);
             let (hits, _) = node.entries(&box_ray, t_min, t_max);
             if hits != 0 {
                 // The last child pushed is the one popped next: it skips the stack.
