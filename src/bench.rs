@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use bumpalo::Bump;
 use rayon::prelude::*;
 
-use crate::accel::count::NoCount;
+use crate::accel::count::{Count, CountLanes, Counter, NoCount, Tally, SHARE};
 use crate::accel::stream::{self, Occlusions, Query};
 use crate::accel::Tracer;
 use crate::plural::count;
@@ -25,6 +25,12 @@ pub const OFFSET: f64 = 1e-4;
 const CHUNK: usize = 128;
 /// An idle lane of a block.
 const IDLE: u32 = u32::MAX;
+/// Each path's name in the protocol's lines.
+const PATHS: [(&str, Path); 3] = [
+    ("p3trace-single", Path::Single),
+    ("p3trace-packet8", Path::Packet),
+    ("p3trace-stream", Path::Stream),
+];
 
 /// One of the protocol's ray sets.
 #[derive(Clone, Debug)]
@@ -237,11 +243,6 @@ pub fn run(
     reps: u32,
     mut report: impl FnMut(Line),
 ) -> Result<(), String> {
-    let paths = [
-        ("p3trace-single", Path::Single),
-        ("p3trace-packet8", Path::Packet),
-        ("p3trace-stream", Path::Stream),
-    ];
     let mut first: Vec<SetResult> = Vec::new();
     for &n in thread_counts {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -250,7 +251,7 @@ pub fn run(
             .map_err(|e| format!("cannot start the worker threads: {e}"))?;
         for (k, set) in sets.iter().enumerate() {
             let mut best: Option<SetResult> = None;
-            for (api, path) in paths {
+            for (api, path) in PATHS {
                 let r = trace_set(tracer, set, path, &pool, reps)?;
                 report(Line::new(set, api, n, &r));
                 match first.get(k) {
@@ -291,12 +292,13 @@ pub fn trace_set(
 ) -> Result<SetResult, String> {
     // Per lane: the hit's t, 0 for an occluded shadow ray, -1 for a miss.
     let mut answers = vec![[f32::NAN; 8]; set.blocks.len()];
+    let mut counts = vec![[NoCount; 8]; set.blocks.len()];
     let mut result: Option<SetResult> = None;
     for pass in 1..=reps.max(1) {
         let start = Instant::now();
-        trace_pass(tracer, set, path, pool, &mut answers);
+        trace_pass(tracer, set, path, pool, &mut answers, &mut counts);
         let elapsed = start.elapsed();
-        let (hits, tsum) = checksum(&in_ray_order(set, &answers));
+        let (hits, tsum) = checksum(&in_ray_order(set, &answers, f32::NAN));
         match &mut result {
             None => {
                 result = Some(SetResult {
@@ -317,67 +319,93 @@ pub fn trace_set(
     Ok(result.expect("at least one pass ran"))
 }
 
-/// One pass over `set` along `path` on `pool`: the answer of each lane of each block.
-fn trace_pass(
+/// The work of each ray of `set` traced along `path` on `pool`, in the set's order: one
+/// untimed pass of the counted walks (`accel::count`), whose answers are the timed ones.
+pub fn count_set(
+    tracer: &Tracer,
+    set: &RaySet,
+    path: Path,
+    pool: &rayon::ThreadPool,
+) -> Vec<Tally> {
+    let mut answers = vec![[f32::NAN; 8]; set.blocks.len()];
+    let mut counts = vec![[Tally::default(); 8]; set.blocks.len()];
+    trace_pass(tracer, set, path, pool, &mut answers, &mut counts);
+    in_ray_order(set, &counts, Tally::default())
+}
+
+/// One pass over `set` along `path` on `pool`: the answer of each lane of each block, and
+/// its work in `counts`.
+fn trace_pass<C: Count>(
     tracer: &Tracer,
     set: &RaySet,
     path: Path,
     pool: &rayon::ThreadPool,
     answers: &mut [[f32; 8]],
+    counts: &mut [[C; 8]],
 ) {
     answers.fill([f32::NAN; 8]);
     pool.install(|| {
         let chunks = answers
             .par_chunks_mut(CHUNK)
+            .zip(counts.par_chunks_mut(CHUNK))
             .zip(set.blocks.par_chunks(CHUNK));
         match path {
-            Path::Single => chunks.for_each(|(answers, blocks)| {
-                each_block(blocks, answers, |b| trace_single(tracer, set, b))
+            Path::Single => chunks.for_each(|((answers, counts), blocks)| {
+                each_block(blocks, answers, counts, |b| trace_single(tracer, set, b))
             }),
-            Path::Packet => chunks.for_each(|(answers, blocks)| {
-                each_block(blocks, answers, |b| trace_packet(tracer, set, b))
+            Path::Packet => chunks.for_each(|((answers, counts), blocks)| {
+                each_block(blocks, answers, counts, |b| trace_packet(tracer, set, b))
             }),
             // Scratch space for a stream, as each of the renderer's workers has.
-            Path::Stream => chunks.for_each_init(Bump::new, |arena, (answers, blocks)| {
-                arena.reset();
-                trace_stream(tracer, set, blocks, answers, arena)
-            }),
+            Path::Stream => {
+                chunks.for_each_init(Bump::new, |arena, ((answers, counts), blocks)| {
+                    arena.reset();
+                    trace_stream(tracer, set, blocks, answers, counts, arena)
+                })
+            }
         }
     });
 }
 
-/// The answers of `blocks`, each block by `trace`.
-fn each_block(
+/// The answers and counts of `blocks`, each block by `trace`.
+fn each_block<C: Count>(
     blocks: &[[u32; 8]],
     answers: &mut [[f32; 8]],
-    trace: impl Fn(&[u32; 8]) -> [f32; 8],
+    counts: &mut [[C; 8]],
+    trace: impl Fn(&[u32; 8]) -> ([f32; 8], [C; 8]),
 ) {
-    for (answer, block) in answers.iter_mut().zip(blocks) {
-        *answer = trace(block);
+    for ((answer, count), block) in answers.iter_mut().zip(counts).zip(blocks) {
+        (*answer, *count) = trace(block);
     }
 }
 
-/// The answer of each lane of `block`, one ray at a time.
-fn trace_single(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> [f32; 8] {
-    block.map(|i| {
+/// The answer and work of each lane of `block`, one ray at a time.
+fn trace_single<C: Count>(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> ([f32; 8], [C; 8]) {
+    let mut counts = [C::default(); 8];
+    let mut lanes = counts.iter_mut();
+    let answers = block.map(|i| {
+        let count = lanes.next().expect("a count per lane");
         if i == IDLE {
             return -1.0;
         }
         let (ray, t_max) = (&set.rays[i as usize], set.t_max[i as usize]);
         if set.occlusion {
-            if tracer.occluded(ray, 0.0, t_max) {
+            if tracer.occluded_counting(ray, 0.0, t_max, count) {
                 0.0
             } else {
                 -1.0
             }
         } else {
-            tracer.closest(ray, 0.0, t_max).map_or(-1.0, |h| h.t)
+            tracer
+                .closest_counting(ray, 0.0, t_max, count)
+                .map_or(-1.0, |h| h.t)
         }
-    })
+    });
+    (answers, counts)
 }
 
-/// The answer of each lane of `block`, the block as one packet.
-fn trace_packet(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> [f32; 8] {
+/// The answer and work of each lane of `block`, the block as one packet.
+fn trace_packet<C: Count>(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> ([f32; 8], [C; 8]) {
     let active = lane_mask(|k| block[k] != IDLE);
     // Idle lanes carry a copy of the first ray and are masked off.
     let lane = |k: usize| if block[k] == IDLE { block[0] } else { block[k] } as usize;
@@ -385,13 +413,15 @@ fn trace_packet(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> [f32; 8] {
     let packet = RayPacket::new(&rays)
         .with_t_max(std::array::from_fn(|k| set.t_max[lane(k)]))
         .with_active(active);
-    if set.occlusion {
-        let blocked = tracer.occluded_packet(&packet);
+    let mut count = C::Lanes::default();
+    let answers = if set.occlusion {
+        let blocked = tracer.occluded_packet_counting::<C>(&packet, &mut count);
         std::array::from_fn(|k| if blocked & (1 << k) != 0 { 0.0 } else { -1.0 })
     } else {
-        let hits = tracer.closest_packet(&packet);
+        let hits = tracer.closest_packet_counting::<C>(&packet, &mut count);
         hits.map(|h| h.map_or(-1.0, |h| h.t))
-    }
+    };
+    (answers, std::array::from_fn(|k| count.lane(k)))
 }
 
 /// A ray of a set and its `t_max`, as a stream takes it, and the place of its answer.
@@ -412,17 +442,19 @@ impl Query for SetQuery<'_> {
     }
 }
 
-/// The answers of up to [`CHUNK`] `blocks` as one stream of [`crate::accel::stream`],
-/// its scratch space in `arena`: closest-hit rays in block order, occlusion rays grouped
-/// by their light, as the renderer traces its queues. Idle lanes are left out.
-fn trace_stream(
+/// The answers and work of up to [`CHUNK`] `blocks` as one stream of
+/// [`crate::accel::stream`], its scratch space in `arena`: closest-hit rays in block
+/// order, occlusion rays grouped by their light, as the renderer traces its queues. Idle
+/// lanes are left out.
+fn trace_stream<C: Count>(
     tracer: &Tracer,
     set: &RaySet,
     blocks: &[[u32; 8]],
     answers: &mut [[f32; 8]],
+    counts: &mut [[C; 8]],
     arena: &Bump,
 ) {
-    let answers = answers.as_flattened_mut();
+    let (answers, counts) = (answers.as_flattened_mut(), counts.as_flattened_mut());
     // The rays of the stream, by their index in the set.
     let rays = blocks.as_flattened().iter().enumerate();
     let rays = rays.filter(|(_, &i)| i != IDLE).map(|(place, &i)| {
@@ -435,26 +467,37 @@ fn trace_stream(
         for (i, query) in rays {
             stream.push(set.light[i], query);
         }
-        let (blocked, _) = stream.trace::<NoCount>(tracer, arena);
+        let (blocked, work) = stream.trace::<C>(tracer, arena);
         for (query, &blocked) in stream.queries().iter().zip(blocked) {
             answers[query.place] = if blocked { 0.0 } else { -1.0 };
         }
+        if C::ON {
+            for (query, &work) in stream.queries().iter().zip(work) {
+                counts[query.place] = work;
+            }
+        }
     } else {
-        stream::closest(tracer, rays.map(|(_, query)| query), |queries, hits| {
+        let queries = rays.map(|(_, query)| query);
+        stream::closest_counting::<_, C>(tracer, queries, |queries, hits, work| {
             for (query, hit) in queries.iter().zip(hits) {
                 answers[query.place] = hit.map_or(-1.0, |h| h.t);
+            }
+            if C::ON {
+                for (k, query) in queries.iter().enumerate() {
+                    counts[query.place] = work.lane(k);
+                }
             }
         });
     }
 }
 
-/// The answers of `blocks` rearranged into the order of the set's rays.
-fn in_ray_order(set: &RaySet, answers: &[[f32; 8]]) -> Vec<f32> {
-    let mut ordered = vec![f32::NAN; set.rays.len()];
-    for (block, answer) in set.blocks.iter().zip(answers) {
-        for (&i, &a) in block.iter().zip(answer) {
+/// Each lane's value of `blocks` rearranged into the order of the set's rays.
+fn in_ray_order<T: Copy>(set: &RaySet, lanes: &[[T; 8]], unset: T) -> Vec<T> {
+    let mut ordered = vec![unset; set.rays.len()];
+    for (block, values) in set.blocks.iter().zip(lanes) {
+        for (&i, &value) in block.iter().zip(values) {
             if i != IDLE {
-                ordered[i as usize] = a;
+                ordered[i as usize] = value;
             }
         }
     }
@@ -467,6 +510,108 @@ fn checksum(answers: &[f32]) -> (u64, f64) {
         .iter()
         .filter(|&&t| t >= 0.0)
         .fold((0, 0.0), |(hits, sum), &t| (hits + 1, sum + t as f64))
+}
+
+/// How one counter spreads over a set's rays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spread {
+    pub mean: f64,
+    /// The 50th, 90th and 99th percentiles (nearest rank).
+    pub p50: u32,
+    pub p90: u32,
+    pub p99: u32,
+    pub total: u64,
+}
+
+impl Spread {
+    fn of(mut values: Vec<u32>) -> Self {
+        values.sort_unstable();
+        let n = values.len();
+        let rank = |q: f64| values.get(((q * n as f64).ceil() as usize).max(1) - 1);
+        let total: u64 = values.iter().map(|&v| u64::from(v)).sum();
+        Spread {
+            mean: total as f64 / n.max(1) as f64,
+            p50: rank(0.5).copied().unwrap_or(0),
+            p90: rank(0.9).copied().unwrap_or(0),
+            p99: rank(0.99).copied().unwrap_or(0),
+            total,
+        }
+    }
+}
+
+/// The traversal work of a set's rays along one path: each counter's spread per ray and,
+/// for packets, how many of a packet's eight lanes are active at a node visited and at a
+/// leaf tested, on average (visits finished one ray at a time count as one lane).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Work {
+    pub ray_set: &'static str,
+    pub api: &'static str,
+    pub rays: usize,
+    pub counters: Vec<(Counter, Spread)>,
+    pub lanes_at_nodes: Option<f64>,
+    pub lanes_at_leaves: Option<f64>,
+}
+
+impl Work {
+    /// The work of `set`'s rays whose counts are `tallies`, traced along `path`.
+    pub fn new(set: &RaySet, (api, path): (&'static str, Path), tallies: &[Tally]) -> Self {
+        let counters = Counter::ALL
+            .into_iter()
+            .map(|c| (c, Spread::of(tallies.iter().map(|t| t.get(c)).collect())))
+            .collect();
+        // Visits are the lanes' shares summed (`accel::count`).
+        let lanes = |events: fn(&Tally) -> u32, share: fn(&Tally) -> u32| {
+            let events: u64 = tallies.iter().map(|t| u64::from(events(t))).sum();
+            let visits =
+                tallies.iter().map(|t| u64::from(share(t))).sum::<u64>() as f64 / f64::from(SHARE);
+            (path != Path::Single && visits > 0.0).then(|| events as f64 / visits)
+        };
+        Work {
+            ray_set: set.name,
+            api,
+            rays: tallies.len(),
+            counters,
+            lanes_at_nodes: lanes(|t| t.nodes, |t| t.node_share),
+            lanes_at_leaves: lanes(|t| t.leaves, |t| t.leaf_share),
+        }
+    }
+
+    /// `# work` comment lines: a line per counter that counted anything, then the lanes.
+    pub fn lines(&self) -> Vec<String> {
+        let head = format!("# work  {:<10}  {:<15}", self.ray_set, self.api);
+        let mut lines: Vec<String> = self
+            .counters
+            .iter()
+            .filter(|(_, s)| s.total > 0)
+            .map(|(c, s)| {
+                format!(
+                    "{head}  {:<6}  mean {:8.3}  p50 {:4}  p90 {:4}  p99 {:4}  total {}",
+                    c.name(),
+                    s.mean,
+                    s.p50,
+                    s.p90,
+                    s.p99,
+                    s.total
+                )
+            })
+            .collect();
+        if let (Some(nodes), Some(leaves)) = (self.lanes_at_nodes, self.lanes_at_leaves) {
+            lines.push(format!(
+                "{head}  lanes   {nodes:.2} of 8 at a node, {leaves:.2} of 8 at a leaf"
+            ));
+        }
+        lines
+    }
+}
+
+/// The work of every set along every path, counted on `pool` (counts do not depend on
+/// the thread count).
+pub fn work(tracer: &Tracer, sets: &[RaySet], pool: &rayon::ThreadPool) -> Vec<Work> {
+    sets.iter()
+        .flat_map(|set| {
+            PATHS.map(|path| Work::new(set, path, &count_set(tracer, set, path.1, pool)))
+        })
+        .collect()
 }
 
 /// One result of the protocol: a set traced along one path (`api`) with `threads`.
@@ -628,11 +773,16 @@ mod tests {
         }
         text += "s 0 0 0 1\ns 1.5 0.5 1.5 0.5\ns -1.2 -0.8 1.2 0.4\ns 0.3 -1.6 0.8 0.3\n";
         with_sets(&text, |tracer, sets, pool| {
-            let answers = |set: &RaySet, path| {
+            fn pass_answers<C: Count>(
+                (tracer, set, pool): (&Tracer, &RaySet, &rayon::ThreadPool),
+                path: Path,
+            ) -> Vec<f32> {
                 let mut answers = vec![[f32::NAN; 8]; set.blocks.len()];
-                trace_pass(tracer, set, path, pool, &mut answers);
-                in_ray_order(set, &answers)
-            };
+                let mut counts = vec![[C::default(); 8]; set.blocks.len()];
+                trace_pass(tracer, set, path, pool, &mut answers, &mut counts);
+                in_ray_order(set, &answers, f32::NAN)
+            }
+            let answers = |set: &RaySet, path| pass_answers::<NoCount>((tracer, set, pool), path);
             for set in sets {
                 let single = answers(set, Path::Single);
                 assert!(
@@ -642,6 +792,11 @@ mod tests {
                 );
                 for path in [Path::Packet, Path::Stream] {
                     assert!(answers(set, path) == single, "{} {path:?}", set.name);
+                }
+                // The counted pass of `--stats` finds what the timed ones do.
+                for path in [Path::Single, Path::Packet, Path::Stream] {
+                    let counted = pass_answers::<Tally>((tracer, set, pool), path);
+                    assert!(counted == single, "{} {path:?} counted", set.name);
                 }
             }
             let shadow = answers(&sets[1], Path::Single);

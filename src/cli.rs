@@ -363,9 +363,17 @@ pub struct BenchArgs {
     pub reps: u32,
     /// Also write the run as one JSON object to FILE, or to standard output for `-`
     /// (the text lines then go to stderr): version, commit, CPU, scene, structure and
-    /// every protocol line.
+    /// every protocol line (and with --stats, the work).
     #[arg(long, value_name = "FILE|-")]
     pub json: Option<PathBuf>,
+    /// Also count each set's traversal work along each path (in one more, untimed pass
+    /// of the walks built to count, on one thread) and print, per ray, the mean and the
+    /// 50th, 90th and 99th percentiles of the interior nodes visited, child boxes tested,
+    /// leaves entered, primitives tested (planes included) and grid cells visited; for
+    /// packets, the lanes of eight active at a node and at a leaf; and the structure's
+    /// statistics (nodes, leaves, depth, SAH cost, memory). The timed passes count nothing.
+    #[arg(long)]
+    pub stats: bool,
     #[command(flatten)]
     pub accel: AccelArgs,
 }

@@ -634,6 +634,24 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
         lines.push(line);
     })
     .map_err(Failure::Run)?;
+    let work = if args.stats {
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .map_err(|e| Failure::Run(format!("cannot start a worker thread: {e}")))?;
+        say(&format!("# structure {name}:"));
+        for line in &stats {
+            say(&format!("#   {line}"));
+        }
+        say("# work per ray: mean, 50th, 90th and 99th percentiles, and the set's total");
+        let work = bench::work(&tracer, &sets, &one);
+        for line in work.iter().flat_map(bench::Work::lines) {
+            say(&line);
+        }
+        work
+    } else {
+        Vec::new()
+    };
     if let Some(target) = &args.json {
         let value = statistics::bench(&statistics::BenchRun {
             scene: &scene,
@@ -643,6 +661,7 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
             stats: &stats,
             reps: args.reps,
             lines: &lines,
+            work: &work,
         });
         statistics::write(target, &value).map_err(Failure::Run)?;
     }

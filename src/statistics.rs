@@ -6,7 +6,7 @@ use std::io::Write;
 use std::path::Path;
 use std::time::Duration;
 
-use p3trace::bench::Line;
+use p3trace::bench::{Line, Work};
 use p3trace::machine;
 use p3trace::render::{RenderOptions, RenderReport};
 use p3trace::scene::Scene;
@@ -81,6 +81,8 @@ pub struct BenchRun<'a> {
     pub stats: &'a [String],
     pub reps: u32,
     pub lines: &'a [Line],
+    /// Each set's work along each path, with `--stats`.
+    pub work: &'a [Work],
 }
 
 pub fn bench(run: &BenchRun) -> Value {
@@ -100,7 +102,7 @@ pub fn bench(run: &BenchRun) -> Value {
             })
         })
         .collect();
-    json!({
+    let mut value = json!({
         "program": program,
         "cpu": cpu,
         "command": "bench",
@@ -109,6 +111,30 @@ pub fn bench(run: &BenchRun) -> Value {
         "structure": structure(run.structure, run.build_time, run.stats),
         "reps": run.reps,
         "lines": lines,
+    });
+    if !run.work.is_empty() {
+        value["work"] = run.work.iter().map(work).collect();
+    }
+    value
+}
+
+/// One set's work along one path: each counter's spread per ray and, for packets, the
+/// lanes active at nodes and leaves.
+fn work(w: &Work) -> Value {
+    let mut counters = serde_json::Map::new();
+    for (counter, s) in &w.counters {
+        counters.insert(
+            counter.name().into(),
+            json!({ "mean": s.mean, "p50": s.p50, "p90": s.p90, "p99": s.p99, "total": s.total }),
+        );
+    }
+    json!({
+        "ray_set": w.ray_set,
+        "api": w.api,
+        "rays": w.rays,
+        "per_ray": counters,
+        "lanes_at_nodes": w.lanes_at_nodes,
+        "lanes_at_leaves": w.lanes_at_leaves,
     })
 }
 

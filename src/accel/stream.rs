@@ -53,7 +53,7 @@ impl<Q: Query> Query for &Q {
 
 /// Traces `queries` in their order as packets of eight, and gives `hits` each packet's
 /// queries and their closest hits.
-#[inline(never)]
+#[inline]
 pub fn closest<Q: Query>(
     tracer: &Tracer,
     queries: impl IntoIterator<Item = Q>,
@@ -63,6 +63,7 @@ pub fn closest<Q: Query>(
 }
 
 /// [`closest`], with each packet's work lane by lane.
+#[inline(never)]
 pub fn closest_counting<Q: Query, C: Count>(
     tracer: &Tracer,
     queries: impl IntoIterator<Item = Q>,

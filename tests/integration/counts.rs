@@ -4,6 +4,7 @@
 //! what that ray alone does. That counting changes no answer is checked beside the
 //! structures' answers (`accel.rs`).
 
+use crate::common;
 use glam::Vec3;
 use p3trace::accel::count::{CountLanes, LaneTallies, Tally};
 use p3trace::accel::{AccelKind, AccelOptions, BvhBuild, BvhWidth, Tracer};
@@ -176,6 +177,72 @@ fn a_packet_of_one_ray_counts_what_the_ray_does_alone() {
             assert!((0..8)
                 .filter(|&j| j != k)
                 .all(|j| lanes.lane(j) == Tally::default()));
+        }
+    }
+}
+
+/// `bench --stats --json -` on `scene` with `--accel ACCEL`: the work of its sets.
+fn bench_work(scene: &str, accel: &str) -> Vec<serde_json::Value> {
+    let scene = common::project_file(scene).display().to_string();
+    let args = [
+        "bench",
+        &scene,
+        "--accel",
+        accel,
+        "--reps",
+        "1",
+        "--threads",
+        "1",
+        "--stats",
+        "--json",
+        "-",
+    ];
+    let run = common::succeeds(&args);
+    let text = common::stderr(&run);
+    assert!(text.contains("# work  primary"), "{text}");
+    let value: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+    value["work"].as_array().expect("a work list").clone()
+}
+
+#[test]
+fn bench_stats_count_every_set_along_every_path() {
+    // balls_low: ten spheres and a floor of two triangles, no plane.
+    let brute = bench_work("scenes/balls_low.p3f", "none");
+    assert_eq!(brute.len(), 3 * 3, "three sets, three paths");
+    for work in &brute {
+        let (set, api) = (
+            work["ray_set"].as_str().unwrap(),
+            work["api"].as_str().unwrap(),
+        );
+        let prims = &work["per_ray"]["prims"];
+        if set != "shadow" {
+            // Closest hits: brute force tests all twelve objects for every ray.
+            for key in ["p50", "p90", "p99"] {
+                assert_eq!(prims[key], 12, "{set} {api} {key}");
+            }
+            assert_eq!(prims["mean"], 12.0, "{set} {api}");
+        }
+        // No nodes, no leaves: no lanes at them either.
+        assert_eq!(work["per_ray"]["nodes"]["total"], 0, "{set} {api}");
+        assert!(work["lanes_at_nodes"].is_null() && work["lanes_at_leaves"].is_null());
+    }
+    for (accel, walks) in [("bvh", "nodes"), ("grid", "cells")] {
+        for work in bench_work("scenes/balls_low.p3f", accel) {
+            let name = format!("{accel} {} {}", work["ray_set"], work["api"]);
+            let counted = &work["per_ray"][walks];
+            assert!(counted["total"].as_u64().unwrap() > 0, "{name}");
+            let p = |key: &str| counted[key].as_u64().unwrap();
+            assert!(p("p50") <= p("p90") && p("p90") <= p("p99"), "{name}");
+            let rays = work["rays"].as_f64().unwrap();
+            let total = counted["total"].as_f64().unwrap();
+            assert!((counted["mean"].as_f64().unwrap() * rays - total).abs() < 1e-6 * total);
+            // Lanes are a packet's: none for single rays.
+            let lanes = work["lanes_at_leaves"].as_f64();
+            assert_eq!(lanes.is_none(), work["api"] == "p3trace-single", "{name}");
+            assert!(
+                lanes.is_none_or(|l| (1.0..=8.0).contains(&l)),
+                "{name}: {lanes:?}"
+            );
         }
     }
 }

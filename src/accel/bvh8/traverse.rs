@@ -41,18 +41,19 @@ impl Bvh8 {
         t_max: f32,
         counted: &mut C,
     ) -> bool {
-        let (_, count, index) = leaf_parts(child);
         counted.leaf();
-        match self.leaves.blocks(child, query, t_max) {
-            Some(blocked) => {
-                counted.prims(count as u32);
-                blocked
-            }
-            None => self.prims[index..index + count].iter().any(|&prim| {
+        let in_pack = self.leaves.blocks(child, query, t_max);
+        if in_pack.is_some() {
+            counted.prims(leaf_parts(child).1 as u32);
+        }
+        in_pack.unwrap_or_else(|| {
+            let (_, count, index) = leaf_parts(child);
+            let prims = &self.prims[index..index + count];
+            prims.iter().any(|&prim| {
                 counted.prims(1);
                 geometry.intersect(prim, query, t_max).is_some()
-            }),
-        }
+            })
+        })
     }
 
     /// The closest hit of `query` in the subtree under `start`, offered to `closest`.
