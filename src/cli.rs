@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use p3trace::accel::count::Counter;
 use p3trace::accel::{AccelKind, AccelOptions, BvhBuild, BvhWidth};
 use p3trace::generate::skybox::Up;
 use p3trace::generate::{mountain, sphereflake};
@@ -14,7 +15,7 @@ use p3trace::limits::MAX_SPP_SIDE;
 use p3trace::render::light::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
 use p3trace::render::region::TileIndex;
 use p3trace::render::shade::Profile;
-use p3trace::render::RenderMode;
+use p3trace::render::{CostRays, RenderMode};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -311,9 +312,34 @@ pub struct RenderArgs {
     /// line at every tenth of the tiles and at least every 10 s.
     #[arg(short, long)]
     pub quiet: bool,
-    /// Also print the structure's build time and statistics (with --quiet, only them).
+    /// Also print the structure's build time and statistics, and the traversal work of
+    /// the frame's rays by kind (primary, shadow, reflection, refraction): the interior
+    /// nodes visited, child boxes tested, leaves entered, primitives tested (planes
+    /// included) and grid cells visited, in all and per ray. Counting runs the walks built
+    /// to count, which take a little longer than the plain ones: time renders without
+    /// --stats. With --quiet, only these lines.
     #[arg(long)]
     pub stats: bool,
+    /// Write a cost image instead of the colours: each pixel's count of COUNTER over all
+    /// its samples' rays (see --cost-rays): nodes (interior nodes visited), boxes (child
+    /// boxes tested), leaves (leaves entered), prims (primitives tested, planes included)
+    /// or cells (grid cells visited, --accel grid). A .png or .ppm output shows the counts
+    /// on the viridis scale (0 dark purple, the top of the scale yellow) with a colour bar
+    /// and its counts drawn beside the image; an .exr output keeps the raw counts as one
+    /// float channel, Y, which `merge` joins as it joins colour parts and `compare`
+    /// compares as counts. A counter the structure never counts is refused.
+    #[arg(long, value_name = "COUNTER", value_parser = one_of(COUNTERS))]
+    pub cost: Option<Counter>,
+    /// The rays a cost image counts: all (the primary rays and every ray they spawn,
+    /// shadow rays included) or primary (the primary rays alone).
+    #[arg(long, value_name = "RAYS", value_parser = one_of(COST_RAYS), default_value = "all",
+          requires = "cost")]
+    pub cost_rays: CostRays,
+    /// The count at the top of a cost picture's scale (larger counts take its colour), so
+    /// that pictures of two structures share one scale. Default: the image's largest count.
+    #[arg(long, value_name = "N", value_parser = parse_cost_max, requires = "cost",
+          allow_negative_numbers = true)]
+    pub cost_max: Option<f32>,
     /// Write the run's statistics as one JSON object to FILE, or to standard output for
     /// `-` (the closing line then goes to stderr): version, commit, CPU, scene, size,
     /// samples, structure, build and render seconds, rays by kind, Mrays/s.
@@ -342,6 +368,11 @@ pub struct MergeArgs {
     #[arg(long, value_name = "N", allow_negative_numbers = true,
           value_parser = whole::<u32>(1..=u32::MAX.into()))]
     pub tiles: Option<u32>,
+    /// For parts of a cost image (`render --cost`): the count at the top of the merged
+    /// picture's scale, as `render --cost-max` (default: the frame's largest count).
+    /// Refused for parts of a colour image.
+    #[arg(long, value_name = "N", value_parser = parse_cost_max, allow_negative_numbers = true)]
+    pub cost_max: Option<f32>,
 }
 
 #[derive(Args, Debug)]
@@ -436,6 +467,14 @@ const MODES: &[(&str, RenderMode)] = &[
     ("scalar", RenderMode::Scalar),
 ];
 const BVH_BUILDS: &[(&str, BvhBuild)] = &[("sah", BvhBuild::Sah), ("midpoint", BvhBuild::Midpoint)];
+const COUNTERS: &[(&str, Counter)] = &[
+    ("nodes", Counter::Nodes),
+    ("boxes", Counter::Boxes),
+    ("leaves", Counter::Leaves),
+    ("prims", Counter::Prims),
+    ("cells", Counter::Cells),
+];
+const COST_RAYS: &[(&str, CostRays)] = &[("all", CostRays::All), ("primary", CostRays::Primary)];
 const UP_AXES: &[(&str, Up)] = &[("y", Up::Y), ("z", Up::Z)];
 
 /// Parses one of `values` by its name; help, the man page and the completions list the
@@ -556,6 +595,10 @@ fn parse_diff_scale(text: &str) -> Result<f32, String> {
 
 fn parse_percentage(text: &str) -> Result<f64, String> {
     number_in(text, "a percentage from 0 to 100", 0.0..=100.0)
+}
+
+fn parse_cost_max(text: &str) -> Result<f32, String> {
+    number_in(text, "a count above 0", f32::MIN_POSITIVE..=f32::MAX)
 }
 
 fn parse_aperture(text: &str) -> Result<f32, String> {

@@ -65,6 +65,48 @@ pub fn load(path: &Path) -> Result<Levels, String> {
     })
 }
 
+/// How two cost images (`render --cost`) of one counter compare: their totals, means,
+/// largest counts, the ratio of the second's total to the first's, and the share of
+/// pixels where the second counts more.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CostRatio {
+    pub totals: [f64; 2],
+    pub means: [f64; 2],
+    pub largest: [f32; 2],
+    /// The second's total over the first's (infinite where the first counts nothing).
+    pub ratio: f64,
+    /// The share of pixels (0 to 1) whose count is larger in the second.
+    pub larger: f64,
+}
+
+/// Compares the cost images `a` and `b` (their counts in each pixel's first channel),
+/// which must be of one size.
+pub fn cost_ratio(a: &Film, b: &Film) -> Result<CostRatio, String> {
+    if (a.width, a.height) != (b.width, b.height) {
+        return Err(format!(
+            "the images differ in size: {}x{} and {}x{}",
+            a.width, a.height, b.width, b.height
+        ));
+    }
+    let total = |f: &Film| f.pixels.iter().map(|p| f64::from(p.x)).sum::<f64>();
+    let largest = |f: &Film| f.pixels.iter().map(|p| p.x).fold(0.0, f32::max);
+    let (ta, tb) = (total(a), total(b));
+    let n = a.pixels.len().max(1) as f64;
+    let larger = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .filter(|(p, q)| q.x > p.x)
+        .count();
+    Ok(CostRatio {
+        totals: [ta, tb],
+        means: [ta / n, tb / n],
+        largest: [largest(a), largest(b)],
+        ratio: if ta > 0.0 { tb / ta } else { f64::INFINITY },
+        larger: larger as f64 / n,
+    })
+}
+
 /// Compares two images of the same size; `tolerance` is in levels.
 pub fn compare(a: &Levels, b: &Levels, tolerance: f32) -> Result<Comparison, String> {
     if (a.width, a.height) != (b.width, b.height) {
@@ -399,6 +441,26 @@ mod tests {
             .map(|i| luminance(heat(i as f32 / 100.0)))
             .collect();
         assert!(steps.windows(2).all(|w| w[0] < w[1]), "{steps:?}");
+    }
+
+    #[test]
+    fn cost_images_compare_by_their_totals() {
+        let film = |counts: &[f32]| Film {
+            width: counts.len() as u32,
+            height: 1,
+            pixels: counts.iter().map(|&c| Vec3::splat(c)).collect(),
+        };
+        let r = cost_ratio(&film(&[1.0, 2.0, 3.0, 2.0]), &film(&[2.0, 2.0, 9.0, 3.0])).unwrap();
+        assert_eq!(r.totals, [8.0, 16.0]);
+        assert_eq!(r.ratio, 2.0);
+        assert_eq!(r.means, [2.0, 4.0]);
+        assert_eq!(r.largest, [3.0, 9.0]);
+        assert_eq!(r.larger, 0.75);
+        assert!(cost_ratio(&film(&[1.0]), &film(&[1.0, 2.0])).is_err());
+        assert_eq!(
+            cost_ratio(&film(&[0.0]), &film(&[1.0])).unwrap().ratio,
+            f64::INFINITY
+        );
     }
 
     #[test]

@@ -12,7 +12,10 @@ use std::io::Cursor;
 use glam::Vec3;
 
 use crate::limits::check_image_size;
-use crate::render::film::{read_exr_pixels, Film, Placement, EXR_NOTE};
+use crate::render::cost::CostMap;
+use crate::render::film::{
+    read_exr_counts, read_exr_pixels, Film, Placement, COUNT_CHANNEL, EXR_NOTE,
+};
 use crate::render::region::{Region, TileIndex};
 use crate::render::{RenderOptions, Sampling};
 use crate::scene::Scene;
@@ -30,14 +33,16 @@ const TILE_KEY: &str = "tile: ";
 
 /// The text of an EXR file's `p3trace` attribute: the program, the scene (its file's name,
 /// not its path, which may differ between machines, and the hash of its bytes), and every
-/// setting that changes pixels. Threads, the structure and
-/// the ray mode are left out: they never change an image. A part rendered with `--tile`
-/// adds its tile as the last line.
+/// setting that changes pixels. Threads, the structure and the ray mode are left out:
+/// they never change a colour. A cost image (`cost`, from the structure named
+/// `structure`) says so in a line of its own, with the structure and the mode, which
+/// change its counts. A part rendered with `--tile` adds its tile as the last line.
 pub fn note(
     scene: &Scene,
     scene_hash: u64,
     options: &RenderOptions,
     skybox: bool,
+    cost: Option<(CostMap, &str)>,
     tile: Option<TileIndex>,
 ) -> String {
     let shade = &options.shade;
@@ -80,6 +85,9 @@ pub fn note(
         options.shutter[1],
         if skybox { "yes" } else { "no" },
     );
+    if let Some((cost, structure)) = cost {
+        text.push_str(&format!("\n{}", cost.note_line(structure, options.mode)));
+    }
     if let Some(tile) = tile {
         text.push_str(&format!("\n{TILE_KEY}{tile}"));
     }
@@ -129,12 +137,20 @@ pub fn read_part(bytes: &[u8], name: &str) -> Result<Part, String> {
         .map(|c| (c.name.to_string(), c.sample_type))
         .collect();
     let rgb = ["B", "G", "R"].map(|c| (c.to_string(), SampleType::F32));
-    if channels != rgb {
+    let counts = [(COUNT_CHANNEL.to_string(), SampleType::F32)];
+    // How to read its pixels, and the bytes of each.
+    type Reader = fn(&[u8], u32, u32) -> Result<Vec<Vec3>, String>;
+    let (read_pixels, bytes_per_pixel): (Reader, u64) = if channels == rgb {
+        (read_exr_pixels, 12)
+    } else if channels == counts {
+        (read_exr_counts, 4)
+    } else {
         return Err(bad(format!(
-            "channels {:?}; a part has R, G and B as 32-bit floats",
+            "channels {:?}; a part has R, G and B (a colour image) or {COUNT_CHANNEL} (a \
+             cost image) as 32-bit floats",
             channels.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>()
         )));
-    }
+    };
     let display = header.shared_attributes.display_window;
     let side = |n: usize| u32::try_from(n).ok().filter(|&n| n > 0);
     let (Some(width), Some(height)) = (side(display.size.x()), side(display.size.y())) else {
@@ -180,7 +196,7 @@ pub fn read_part(bytes: &[u8], name: &str) -> Result<Part, String> {
             )))
         }
     };
-    if region.pixels() * 12 > bytes.len() as u64 * fold {
+    if region.pixels() * bytes_per_pixel > bytes.len() as u64 * fold {
         return Err(bad(format!(
             "too short ({} bytes) for its {}x{} pixels",
             bytes.len(),
@@ -214,7 +230,7 @@ pub fn read_part(bytes: &[u8], name: &str) -> Result<Part, String> {
             )));
         }
     }
-    let pixels = read_exr_pixels(bytes, region.width(), region.height()).map_err(&bad)?;
+    let pixels = read_pixels(bytes, region.width(), region.height()).map_err(&bad)?;
     Ok(Part {
         name: name.to_string(),
         identity,
@@ -265,10 +281,23 @@ impl Canvas {
             .first()
             .map_or(part.name.as_str(), String::as_str);
         if part.identity != self.identity {
-            let (a, b) = self
-                .identity
-                .lines()
-                .zip(part.identity.lines().chain(std::iter::repeat("")))
+            let cost = |identity: &str| CostMap::from_note(identity).ok().flatten().is_some();
+            if cost(&part.identity) != cost(&self.identity) {
+                let (cost, colour) = match cost(&part.identity) {
+                    true => (part.name.as_str(), first),
+                    false => (first, part.name.as_str()),
+                };
+                return Err(format!(
+                    "{cost} is a part of a cost image (render --cost) and {colour} of a colour \
+                     image: they are parts of different renders"
+                ));
+            }
+            let (mine, theirs) = (self.identity.lines(), part.identity.lines());
+            let blank = std::iter::repeat("");
+            let (a, b) = mine
+                .chain(blank.clone())
+                .zip(theirs.chain(blank))
+                .take_while(|(a, b)| !a.is_empty() || !b.is_empty())
                 .find(|(a, b)| a != b)
                 .unwrap_or(("", ""));
             return Err(format!(

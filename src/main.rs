@@ -15,18 +15,20 @@ use clap::{CommandFactory, Parser};
 use cli::{
     BenchArgs, Cli, Command, CompareArgs, GenCommand, InfoArgs, MergeArgs, RenderArgs, SceneOutput,
 };
-use p3trace::accel::{AccelOptions, Tracer};
+use p3trace::accel::count::Counter;
+use p3trace::accel::{AccelKind, AccelOptions, Tracer};
 use p3trace::compare::levels;
 use p3trace::farm::{self, Canvas};
 use p3trace::generate::{dragon, mountain, random, skybox, sphereflake};
 use p3trace::intersect::IntersectOptions;
 use p3trace::plural::{count, noun};
 use p3trace::prim::PrimKind;
+use p3trace::render::cost::{self, CostMap};
 use p3trace::render::film::{Film, OutputFormat, Placement};
 use p3trace::render::progress::Progress;
 use p3trace::render::region::Region;
 use p3trace::render::sampler::SampleGrid;
-use p3trace::render::{self, RenderOptions, RenderReport, Sampling};
+use p3trace::render::{self, RenderOptions, RenderReport, RenderWork, Sampling};
 use p3trace::scene::{self, Frame, Light, Scene};
 
 /// Why the command failed, and so which exit code it gives.
@@ -226,14 +228,87 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     let output = render_output(args)?;
     let (scene, scene_hash) = render_scene(args)?;
     let options = render_options(args, &scene)?;
+    let cost = cost_map(args, &options)?;
     let report = render::render(&scene, &options).map_err(Failure::Run)?;
     for w in &report.warnings {
         eprintln!("p3trace: warning: {w}");
     }
-    let note = farm::note(&scene, scene_hash, &options, report.skybox, args.tile);
-    write_image(&output, &options, &report.film, note)?;
+    let made_by = cost.map(|map| (map, report.accel_name.as_str()));
+    let note = farm::note(
+        &scene,
+        scene_hash,
+        &options,
+        report.skybox,
+        made_by,
+        args.tile,
+    );
+    let region = options.region();
+    let placement = Placement {
+        image: (options.width, options.height),
+        origin: (region.x0, region.y0),
+        note: Some(note),
+    };
+    match (&cost, &report.work) {
+        (Some(map), Some(work)) => {
+            let film = map.film(work, region.width(), region.height());
+            cost::write(&film, &output, &placement, map, args.cost_max)
+        }
+        _ => report.film.write_placed(&output, &placement),
+    }
+    .map_err(Failure::Run)?;
     summarise(args, &scene, &options, &report, &output)?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// What `--cost` asks the image to show, refused for a counter that the structure never
+/// counts.
+fn cost_map(args: &RenderArgs, options: &RenderOptions) -> Result<Option<CostMap>, Failure> {
+    let Some(counter) = args.cost else {
+        return Ok(None);
+    };
+    let counts = match options.accel.kind {
+        AccelKind::None => &[Counter::Prims][..],
+        AccelKind::Grid => &[
+            Counter::Boxes,
+            Counter::Leaves,
+            Counter::Prims,
+            Counter::Cells,
+        ],
+        AccelKind::Bvh => &[
+            Counter::Nodes,
+            Counter::Boxes,
+            Counter::Leaves,
+            Counter::Prims,
+        ],
+    };
+    if !counts.contains(&counter) {
+        let names: Vec<&str> = counts.iter().map(|c| c.name()).collect();
+        let structure = match options.accel.kind {
+            AccelKind::None => "brute force",
+            AccelKind::Grid => "the grid",
+            AccelKind::Bvh => "a BVH",
+        };
+        return Err(Failure::Usage(format!(
+            "--cost {}: {structure} counts no {} ({} counted there: {}){}",
+            counter.name(),
+            counter.meaning(),
+            if names.len() == 1 {
+                "only prims is"
+            } else {
+                "these are"
+            },
+            names.join(", "),
+            if counter == Counter::Cells {
+                "; cells are the grid's, --accel grid"
+            } else {
+                ""
+            }
+        )));
+    }
+    Ok(Some(CostMap {
+        counter,
+        rays: args.cost_rays,
+    }))
 }
 
 /// The image `render` writes: `-o`, or the scene's name with .png in the current folder.
@@ -244,7 +319,10 @@ fn render_output(args: &RenderArgs) -> Result<PathBuf, Failure> {
     });
     // Refuse a bad output name, or one that cannot be written, before spending time on
     // the render.
-    OutputFormat::from_path(&output).map_err(Failure::Usage)?;
+    let format = OutputFormat::from_path(&output).map_err(Failure::Usage)?;
+    if args.cost.is_some() && format == OutputFormat::Hdr {
+        return Err(Failure::Usage(cost::refuse_hdr(&output)));
+    }
     check_output(&output)?;
     check_statistics_target(args.json.as_deref())?;
     Ok(output)
@@ -300,6 +378,7 @@ fn render_options(args: &RenderArgs, scene: &Scene) -> Result<RenderOptions, Fai
     };
     options.accel = args.accel.options(scene.accel);
     options.region = region(args, options.width, options.height)?;
+    options.count = args.stats || args.cost.is_some();
     options.check_size().map_err(Failure::Usage)?;
     Ok(options)
 }
@@ -315,23 +394,6 @@ fn region(args: &RenderArgs, width: u32, height: u32) -> Result<Option<Region>, 
     }
     .transpose()
     .map_err(Failure::Usage)
-}
-
-/// Writes `film`, the pixels of the options' region, to `output` in its place in the
-/// whole image, with the `note` that `merge` checks (kept by EXR files).
-fn write_image(
-    output: &Path,
-    options: &RenderOptions,
-    film: &Film,
-    note: String,
-) -> Result<(), Failure> {
-    let region = options.region();
-    let placement = Placement {
-        image: (options.width, options.height),
-        origin: (region.x0, region.y0),
-        note: Some(note),
-    };
-    film.write_placed(output, &placement).map_err(Failure::Run)
 }
 
 /// What `render` says when done: the structure's build with `--stats`, the closing line
@@ -353,6 +415,11 @@ fn summarise(
         for line in &report.accel_stats {
             say(&format!("  {line}"));
         }
+        if let Some(work) = &report.work {
+            for line in work_lines(work) {
+                say(&line);
+            }
+        }
     }
     if !args.quiet {
         say(&closing_line(scene, options, report, output));
@@ -362,6 +429,42 @@ fn summarise(
         statistics::write(target, &value).map_err(Failure::Run)?;
     }
     Ok(())
+}
+
+/// The traversal work of a render's rays by kind, in all and per ray, for the counters
+/// that counted anything: the rays of the pixels of the image (or region).
+fn work_lines(work: &RenderWork) -> Vec<String> {
+    let w = work.by_kind();
+    let kinds = [
+        ("primary", w.primary),
+        ("shadow", w.shadow),
+        ("reflection", w.reflection),
+        ("refraction", w.refraction),
+        ("all", w.total()),
+    ];
+    let total = w.total();
+    let counters: Vec<Counter> = Counter::ALL
+        .into_iter()
+        .filter(|&c| total.get(c) > 0)
+        .collect();
+    let mut head = format!("traversal work {:>15}", "rays");
+    for c in &counters {
+        head.push_str(&format!(" {:>14}", c.name()));
+    }
+    let mut lines = vec![head];
+    for (kind, tally) in kinds {
+        let rays = u64::from(tally.rays);
+        let mut all = format!("  {kind:<10} {:>17}", grouped(rays));
+        let mut each = format!("  {:<10} {:>17}", "", "per ray");
+        for &c in &counters {
+            let sum = u64::from(tally.get(c));
+            all.push_str(&format!(" {:>14}", grouped(sum)));
+            each.push_str(&format!(" {:>14.3}", sum as f64 / rays.max(1) as f64));
+        }
+        lines.push(all);
+        lines.push(each);
+    }
+    lines
 }
 
 /// `balls_low.p3f: 512x512, 1 spp, 0.128 s, 1,171,239 rays, 9.17 Mrays/s -> balls_low.png`,
@@ -479,6 +582,21 @@ fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
         OutputFormat::from_path(path).map_err(Failure::Usage)?;
         check_output(path)?;
     }
+    match (cost_part(&args.first)?, cost_part(&args.second)?) {
+        (Some(a), Some(b)) => return compare_costs(args, &a, &b),
+        (None, None) => {}
+        (a, _) => {
+            let (cost, colour) = match a {
+                Some(_) => (&args.first, &args.second),
+                None => (&args.second, &args.first),
+            };
+            return Err(Failure::Usage(format!(
+                "{} is a cost image (render --cost) and {} is not: they do not compare",
+                cost.display(),
+                colour.display()
+            )));
+        }
+    }
     let a = p3trace::compare::load(&args.first).map_err(Failure::Usage)?;
     let b = p3trace::compare::load(&args.second).map_err(Failure::Usage)?;
     let c = p3trace::compare::compare(&a, &b, args.tolerance).map_err(Failure::Usage)?;
@@ -501,6 +619,65 @@ fn run_compare(args: &CompareArgs) -> Result<ExitCode, Failure> {
         return Ok(ExitCode::from(1));
     }
     println!("match");
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The cost image (`render --cost`) in the EXR file `path`, and what it shows; `None` for
+/// any other file.
+fn cost_part(path: &Path) -> Result<Option<(CostMap, farm::Part)>, Failure> {
+    if OutputFormat::from_path(path) != Ok(OutputFormat::Exr) {
+        return Ok(None);
+    }
+    let bytes = std::fs::read(path)
+        .map_err(|e| Failure::Usage(format!("cannot read {}: {e}", path.display())))?;
+    // A file that is not a part (no note of p3trace's) is for the image comparison.
+    let Ok(part) = farm::read_part(&bytes, &path.display().to_string()) else {
+        return Ok(None);
+    };
+    let map = CostMap::from_note(&part.identity).map_err(Failure::Usage)?;
+    Ok(map.map(|map| (map, part)))
+}
+
+/// `compare` of two cost images: their totals and their ratio, the second's over the
+/// first's.
+fn compare_costs(
+    args: &CompareArgs,
+    (map_a, a): &(CostMap, farm::Part),
+    (map_b, b): &(CostMap, farm::Part),
+) -> Result<ExitCode, Failure> {
+    if map_a.counter != map_b.counter {
+        return Err(Failure::Usage(format!(
+            "{} counts {} and {} counts {}: compare cost images of one counter",
+            args.first.display(),
+            map_a.counter.name(),
+            args.second.display(),
+            map_b.counter.name()
+        )));
+    }
+    let film = |p: &farm::Part| Film {
+        width: p.region.width(),
+        height: p.region.height(),
+        pixels: p.pixels.clone(),
+    };
+    let r = p3trace::compare::cost_ratio(&film(a), &film(b)).map_err(Failure::Usage)?;
+    let made_by = |p: &farm::Part| {
+        p.identity
+            .lines()
+            .find_map(|l| l.strip_prefix("cost: "))
+            .unwrap_or_default()
+            .to_string()
+    };
+    println!("cost: {} and {}", made_by(a), made_by(b));
+    println!("size: {}x{}", a.region.width(), a.region.height());
+    println!(
+        "total: {} and {}",
+        grouped(r.totals[0] as u64),
+        grouped(r.totals[1] as u64)
+    );
+    println!("mean per pixel: {:.3} and {:.3}", r.means[0], r.means[1]);
+    println!("largest: {} and {}", r.largest[0], r.largest[1]);
+    println!("ratio (second / first): {:.4}", r.ratio);
+    println!("pixels larger in the second: {:.3}%", 100.0 * r.larger);
     Ok(ExitCode::SUCCESS)
 }
 
@@ -540,6 +717,13 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
             )),
         };
     };
+    let cost = CostMap::from_note(&canvas.identity).map_err(Failure::Usage)?;
+    if cost.is_none() && args.cost_max.is_some() {
+        return Err(Failure::Usage(
+            "--cost-max: the parts are of a colour image, not of a cost image (render --cost)"
+                .into(),
+        ));
+    }
     let tile_count = args.tiles.or_else(|| canvas.tile_count());
     if args.missing {
         let n = tile_count.ok_or_else(|| {
@@ -576,10 +760,12 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
         .output
         .as_deref()
         .ok_or_else(|| Failure::Usage("merge needs -o FILE".into()))?;
-    canvas
-        .film
-        .write_placed(output, &canvas.placement())
-        .map_err(Failure::Run)?;
+    let placement = canvas.placement();
+    match cost {
+        Some(map) => cost::write(&canvas.film, output, &placement, &map, args.cost_max),
+        None => canvas.film.write_placed(output, &placement),
+    }
+    .map_err(Failure::Run)?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -6,9 +6,10 @@ use std::io::Write;
 use std::path::Path;
 use std::time::Duration;
 
+use p3trace::accel::count::Counter;
 use p3trace::bench::{Line, Work};
 use p3trace::machine;
-use p3trace::render::{RenderOptions, RenderReport};
+use p3trace::render::{RenderOptions, RenderReport, RenderWork};
 use p3trace::scene::Scene;
 use serde_json::{json, Value};
 
@@ -45,7 +46,7 @@ pub fn render(
     let rays = &report.rays;
     let seconds = report.elapsed.as_secs_f64();
     let region = options.region();
-    json!({
+    let mut value = json!({
         "program": program,
         "cpu": cpu,
         "command": "render",
@@ -69,7 +70,39 @@ pub fn render(
             "total": rays.total(),
         },
         "mrays_per_s": rays.total() as f64 / 1e6 / seconds.max(1e-9),
-    })
+    });
+    if let Some(work) = &report.work {
+        value["work"] = render_work(work);
+    }
+    value
+}
+
+/// A counted render's work by kind of ray (the rays of the image's, or region's, pixels):
+/// the rays and each counter's total and mean per ray.
+fn render_work(work: &RenderWork) -> Value {
+    let w = work.by_kind();
+    let kinds = [
+        ("primary", w.primary),
+        ("shadow", w.shadow),
+        ("reflection", w.reflection),
+        ("refraction", w.refraction),
+        ("all", w.total()),
+    ];
+    let mut by_kind = serde_json::Map::new();
+    for (kind, tally) in kinds {
+        let rays = u64::from(tally.rays);
+        let mut counters = serde_json::Map::new();
+        counters.insert("rays".into(), json!(rays));
+        for c in Counter::ALL {
+            let total = u64::from(tally.get(c));
+            counters.insert(
+                c.name().into(),
+                json!({ "total": total, "per_ray": total as f64 / rays.max(1) as f64 }),
+            );
+        }
+        by_kind.insert(kind.into(), Value::Object(counters));
+    }
+    json!({ "by_kind": by_kind })
 }
 
 /// A run of the benchmark protocol: its settings and every line it printed.

@@ -40,6 +40,8 @@ pub trait Count: Copy + Default + std::fmt::Debug + Send + Sync {
     const ON: bool;
     /// A packet's counts, lane by lane.
     type Lanes: CountLanes<Self>;
+    /// A ray asked of the tracer (traceable or not).
+    fn ray(&mut self);
     /// An interior node visited.
     fn node(&mut self);
     /// `n` child boxes tested against the ray.
@@ -57,6 +59,7 @@ pub trait Count: Copy + Default + std::fmt::Debug + Send + Sync {
 /// A packet's counts, lane by lane: the same events as [`Count`], each for the lanes
 /// `lanes` that take part.
 pub trait CountLanes<C>: Default {
+    fn rays(&mut self, lanes: u8);
     fn node(&mut self, lanes: u8);
     fn boxes(&mut self, lanes: u8, n: u32);
     fn leaf(&mut self, lanes: u8);
@@ -76,6 +79,8 @@ impl Count for NoCount {
     const ON: bool = false;
     type Lanes = NoCount;
     #[inline(always)]
+    fn ray(&mut self) {}
+    #[inline(always)]
     fn node(&mut self) {}
     #[inline(always)]
     fn boxes(&mut self, _: u32) {}
@@ -90,6 +95,8 @@ impl Count for NoCount {
 }
 
 impl CountLanes<NoCount> for NoCount {
+    #[inline(always)]
+    fn rays(&mut self, _: u8) {}
     #[inline(always)]
     fn node(&mut self, _: u8) {}
     #[inline(always)]
@@ -111,6 +118,8 @@ impl CountLanes<NoCount> for NoCount {
 /// One ray's work (or, summed, a pixel's or a set's).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Tally {
+    /// Rays asked of the tracer: one for a ray's own work.
+    pub rays: u32,
     /// Interior nodes visited.
     pub nodes: u32,
     /// Child boxes tested against the ray (the grid: its own box).
@@ -190,6 +199,10 @@ impl Count for Tally {
     const ON: bool = true;
     type Lanes = LaneTallies;
     #[inline]
+    fn ray(&mut self) {
+        self.rays += 1;
+    }
+    #[inline]
     fn node(&mut self) {
         self.nodes += 1;
         self.node_share += SHARE;
@@ -213,6 +226,7 @@ impl Count for Tally {
     }
     #[inline]
     fn add(&mut self, other: &Self) {
+        self.rays += other.rays;
         self.nodes += other.nodes;
         self.boxes += other.boxes;
         self.leaves += other.leaves;
@@ -234,6 +248,9 @@ impl LaneTallies {
 }
 
 impl CountLanes<Tally> for LaneTallies {
+    fn rays(&mut self, lanes: u8) {
+        self.each(lanes, |t| t.rays += 1);
+    }
     fn node(&mut self, lanes: u8) {
         let share = SHARE / lanes.count_ones().max(1);
         self.each(lanes, |t| {

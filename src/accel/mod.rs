@@ -311,6 +311,7 @@ impl<'s> Tracer<'s> {
         t_max: f32,
         count: &mut C,
     ) -> Option<Hit> {
+        count.ray();
         if !ray.is_traceable() {
             return None;
         }
@@ -338,6 +339,7 @@ impl<'s> Tracer<'s> {
         t_max: f32,
         count: &mut C,
     ) -> bool {
+        count.ray();
         if !ray.is_traceable() {
             return false;
         }
@@ -361,10 +363,15 @@ impl<'s> Tracer<'s> {
         packet: &RayPacket,
         count: &mut C::Lanes,
     ) -> [Option<Hit>; 8] {
+        count.rays(packet.active);
         let active = packet.active & packet.traceable();
-        if active != packet.active {
-            return self.closest_packet_counting::<C>(&packet.with_active(active), count);
-        }
+        let traceable;
+        let packet = if active != packet.active {
+            traceable = packet.with_active(active);
+            &traceable
+        } else {
+            packet
+        };
         let mut closest = packet.t_max.map(ClosestHit::new);
         let query = RayQuery8 {
             packet,
@@ -396,6 +403,7 @@ impl<'s> Tracer<'s> {
         packet: &RayPacket,
         count: &mut C::Lanes,
     ) -> u8 {
+        count.rays(packet.active);
         let active = packet.active & packet.traceable();
         let options = self.options;
         let query = RayQuery8 { packet, options };

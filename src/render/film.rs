@@ -178,42 +178,74 @@ impl Film {
         out: &mut (impl Write + std::io::Seek),
         placement: &Placement,
     ) -> std::io::Result<()> {
-        use exr::meta::attribute::{AttributeValue, IntegerBounds, Text};
-        use exr::prelude::{
-            Encoding, Image, ImageAttributes, Layer, LayerAttributes, SpecificChannels, Vec2,
-            WritableImage,
-        };
-        let side = |n: u32| i32::try_from(n).map_err(std::io::Error::other);
-        let mut layer = LayerAttributes {
-            layer_position: Vec2(side(placement.origin.0)?, side(placement.origin.1)?),
-            ..LayerAttributes::default()
-        };
-        // One attribute only: the crate keeps attributes in a hash map, so that two would be
-        // written in an order that changes from run to run, and so would the file's bytes.
-        if let Some(note) = &placement.note {
-            layer.other.insert(
-                Text::from(EXR_NOTE),
-                AttributeValue::Text(Text::from_slice_unchecked(note.as_bytes())),
-            );
-        }
-        let (width, height) = (self.width as usize, self.height as usize);
+        use exr::prelude::{Encoding, Image, Layer, SpecificChannels, Vec2, WritableImage};
+        let (attributes, display) = exr_layout(placement)?;
+        let width = self.width as usize;
         let pixels = SpecificChannels::rgb(|at: Vec2<usize>| {
             let p = self.pixels[at.y() * width + at.x()];
             (p.x, p.y, p.z)
         });
         // Lossless, scan lines in increasing order: the same pixels give the same bytes.
-        let layer = Layer::new((width, height), layer, Encoding::SMALL_LOSSLESS, pixels);
-        let display = IntegerBounds::new(
-            (0, 0),
-            (placement.image.0 as usize, placement.image.1 as usize),
-        );
-        let image = Image::new(ImageAttributes::new(display), layer);
+        let size = (width, self.height as usize);
+        let layer = Layer::new(size, attributes, Encoding::SMALL_LOSSLESS, pixels);
+        let image = Image::new(display, layer);
         image
             .write()
             .to_buffered(out)
             .map_err(std::io::Error::other)
     }
+
+    /// Writes the film's first channel as an OpenEXR file of one 32-bit float channel,
+    /// [`COUNT_CHANNEL`], with `placement` as [`Film::write_placed`] writes an EXR file:
+    /// the raw counts of a cost image (`render::cost`).
+    pub fn write_counts(&self, path: &Path, placement: &Placement) -> Result<(), String> {
+        use exr::prelude::{Encoding, Image, Layer, SpecificChannels, Vec2, WritableImage};
+        crate::output::write_atomically(path, |out| {
+            let (attributes, display) = exr_layout(placement)?;
+            let width = self.width as usize;
+            let counts = SpecificChannels::build()
+                .with_channel(COUNT_CHANNEL)
+                .with_pixel_fn(|at: Vec2<usize>| (self.pixels[at.y() * width + at.x()].x,));
+            let size = (width, self.height as usize);
+            let layer = Layer::new(size, attributes, Encoding::SMALL_LOSSLESS, counts);
+            let image = Image::new(display, layer);
+            image
+                .write()
+                .to_buffered(out)
+                .map_err(std::io::Error::other)
+        })
+    }
 }
+
+/// An EXR layer's attributes and the image's for `placement`: the data window's corner,
+/// the display window, and the note.
+fn exr_layout(
+    placement: &Placement,
+) -> std::io::Result<(exr::prelude::LayerAttributes, exr::prelude::ImageAttributes)> {
+    use exr::meta::attribute::{AttributeValue, IntegerBounds, Text};
+    use exr::prelude::{ImageAttributes, LayerAttributes, Vec2};
+    let side = |n: u32| i32::try_from(n).map_err(std::io::Error::other);
+    let mut layer = LayerAttributes {
+        layer_position: Vec2(side(placement.origin.0)?, side(placement.origin.1)?),
+        ..LayerAttributes::default()
+    };
+    // One attribute only: the crate keeps attributes in a hash map, so that two would be
+    // written in an order that changes from run to run, and so would the file's bytes.
+    if let Some(note) = &placement.note {
+        layer.other.insert(
+            Text::from(EXR_NOTE),
+            AttributeValue::Text(Text::from_slice_unchecked(note.as_bytes())),
+        );
+    }
+    let display = IntegerBounds::new(
+        (0, 0),
+        (placement.image.0 as usize, placement.image.1 as usize),
+    );
+    Ok((layer, ImageAttributes::new(display)))
+}
+
+/// The one channel of an EXR file of counts ([`Film::write_counts`]).
+pub const COUNT_CHANNEL: &str = "Y";
 
 /// The R, G and B pixels of the first layer of the OpenEXR file `bytes` that has them,
 /// top row first, which must fill a `width` x `height` data window.
@@ -240,7 +272,37 @@ pub fn read_exr_pixels(bytes: &[u8], width: u32, height: u32) -> Result<Vec<Vec3
         .non_parallel()
         .from_buffered(Cursor::new(bytes))
         .map_err(|e| format!("unreadable pixels ({e})"))?;
-    let pixels = image.layer_data.channel_data.pixels;
+    filled(image.layer_data.channel_data.pixels, width, height)
+}
+
+/// The counts of an EXR file of counts ([`Film::write_counts`]) as pixels whose three
+/// channels hold them, top row first, which must fill a `width` x `height` data window.
+pub fn read_exr_counts(bytes: &[u8], width: u32, height: u32) -> Result<Vec<Vec3>, String> {
+    use exr::prelude::{ReadChannels, ReadLayers, ReadSpecificChannel};
+    let row = width as usize;
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .specific_channels()
+        .required(COUNT_CHANNEL)
+        .collect_pixels(
+            move |size, _| vec![Vec3::ZERO; size.width() * size.height()],
+            move |pixels: &mut Vec<Vec3>, at, (count,): (f32,)| {
+                if let Some(p) = pixels.get_mut(at.y() * row + at.x()) {
+                    *p = Vec3::splat(count);
+                }
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .non_parallel()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|e| format!("unreadable counts ({e})"))?;
+    filled(image.layer_data.channel_data.pixels, width, height)
+}
+
+/// `pixels`, if they fill a `width` x `height` window.
+fn filled(pixels: Vec<Vec3>, width: u32, height: u32) -> Result<Vec<Vec3>, String> {
     if pixels.len() as u64 != u64::from(width) * u64::from(height) {
         return Err("its pixels do not fill its data window".into());
     }

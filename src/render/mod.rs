@@ -12,6 +12,7 @@
 //! nothing.
 
 pub mod camera;
+pub mod cost;
 pub mod film;
 pub mod jpeg_scan;
 pub mod light;
@@ -30,6 +31,7 @@ use bumpalo::Bump;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
+use crate::accel::count::{Count, NoCount, Tally};
 use crate::accel::{AccelKind, AccelOptions, Tracer};
 use crate::intersect::IntersectOptions;
 use crate::limits::{check_image_size, MAX_SPP_SIDE};
@@ -39,6 +41,8 @@ use film::Film;
 use progress::{Meter, Progress};
 use region::Region;
 use sampler::{dim, Sample, SampleGrid, SampleRng};
+pub use shade::CostRays;
+pub use shade::Work;
 use shade::{RayCounts, RayKind, ShadeOptions, Shader};
 use skybox::Skybox;
 
@@ -124,6 +128,9 @@ pub struct RenderOptions {
     pub shutter: [f32; 2],
     /// The pixels to render (a farm's part of the frame); `None` is the whole image.
     pub region: Option<Region>,
+    /// Count the walks' work, pixel by pixel (`accel::count`: the walks built to count,
+    /// a little slower).
+    pub count: bool,
 }
 
 /// The shutter of the course's code, used when a scene has moving spheres.
@@ -152,6 +159,7 @@ impl RenderOptions {
                 [0.0; 2]
             },
             region: None,
+            count: false,
         }
     }
 
@@ -194,6 +202,26 @@ pub struct RenderReport {
     /// Whether a skybox was drawn (the scene named one, it loaded, and it was wanted).
     pub skybox: bool,
     pub warnings: Vec<String>,
+    /// What the rays took, where `options.count` asked.
+    pub work: Option<RenderWork>,
+}
+
+/// The work of a counted render's rays (`accel::count`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderWork {
+    /// Each pixel's: the work of its samples' rays by kind, for the pixels of
+    /// `options.region()`, top row first.
+    pub pixels: Vec<Work<Tally>>,
+}
+
+impl RenderWork {
+    /// The work of every pixel's rays together, by kind.
+    pub fn by_kind(&self) -> Work<Tally> {
+        self.pixels.iter().fold(Work::default(), |mut all, pixel| {
+            all.merge(pixel);
+            all
+        })
+    }
 }
 
 /// Renders `scene` with the structure `options.accel` asks for.
@@ -247,44 +275,53 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         .build()
         .map_err(|e| format!("cannot start the worker threads: {e}"))?;
     let region = options.region();
-    let tiles = tiles(region, options.height);
+    // A counted render traces the whole frame's tiles that meet its region, in full: a
+    // tile's packets, and so its pixels' counts, are then the whole frame's.
+    let traced = match options.count {
+        true => whole_tiles(region, options.width, options.height),
+        false => region,
+    };
+    let tiles = tiles(traced, options.height);
     let progress = Meter::new(options.progress, tiles.len());
     let start = Instant::now();
-    // Each tile writes its own block of this buffer: no allocation per tile.
+    // Each tile writes its own block of these buffers: no allocation per tile.
     let block = (TILE * TILE) as usize;
     let mut tile_pixels = vec![Vec3::ZERO; tiles.len() * block];
-    let rays = pool.install(|| {
-        tile_pixels
-            .par_chunks_mut(block)
-            .zip(tiles.par_iter())
-            .map(|(pixels, &tile)| {
-                let rays = render_tile(&shader, &camera, options, tile, pixels);
-                progress.tile_done();
-                rays
-            })
-            .reduce(RayCounts::default, |mut total, rays| {
-                total += rays;
-                total
-            })
-    });
+    let frame = Frame {
+        shader: &shader,
+        camera: &camera,
+        options,
+        tiles: &tiles,
+        progress: &progress,
+    };
+    let (rays, work) = match options.count {
+        false => {
+            let mut work = vec![Work::<NoCount>::default(); tiles.len() * block];
+            (
+                pool.install(|| frame.trace(&mut tile_pixels, &mut work)),
+                None,
+            )
+        }
+        true => {
+            let mut work = vec![Work::<Tally>::default(); tiles.len() * block];
+            let rays = pool.install(|| frame.trace(&mut tile_pixels, &mut work));
+            let mut pixels = vec![Work::default(); region.pixels() as usize];
+            place(&tiles, &work, region, options.height, &mut pixels);
+            (rays, Some(RenderWork { pixels }))
+        }
+    };
     let elapsed = start.elapsed();
     progress.finish();
     let threads = pool.current_num_threads();
 
     let mut film = Film::new(region.width(), region.height());
-    for (tile, pixels) in tiles.iter().zip(tile_pixels.chunks(block)) {
-        for (k, colour) in pixels[..(tile.width * tile.height) as usize]
-            .iter()
-            .enumerate()
-        {
-            let (x, y) = (
-                tile.x + k as u32 % tile.width,
-                tile.y + k as u32 / tile.width,
-            );
-            let row = options.height - 1 - y - region.y0;
-            film.pixels[(row * region.width() + x - region.x0) as usize] = *colour;
-        }
-    }
+    place(
+        &tiles,
+        &tile_pixels,
+        region,
+        options.height,
+        &mut film.pixels,
+    );
     Ok(RenderReport {
         film,
         rays,
@@ -295,7 +332,76 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
         accel_stats,
         skybox: skybox.is_some(),
         warnings,
+        work,
     })
+}
+
+/// What every tile of a frame shares.
+struct Frame<'f> {
+    shader: &'f Shader<'f>,
+    camera: &'f Camera,
+    options: &'f RenderOptions,
+    tiles: &'f [Tile],
+    progress: &'f Meter,
+}
+
+impl Frame<'_> {
+    /// Renders every tile on the current thread pool into its block of `pixels` and of
+    /// `work`, and returns the rays traced.
+    fn trace<C: Count>(&self, pixels: &mut [Vec3], work: &mut [Work<C>]) -> RayCounts {
+        let block = (TILE * TILE) as usize;
+        pixels
+            .par_chunks_mut(block)
+            .zip(work.par_chunks_mut(block))
+            .zip(self.tiles.par_iter())
+            .map(|((pixels, work), &tile)| {
+                let rays = render_tile(self.shader, self.camera, self.options, tile, pixels, work);
+                self.progress.tile_done();
+                rays
+            })
+            .reduce(RayCounts::default, |mut total, rays| {
+                total += rays;
+                total
+            })
+    }
+}
+
+/// Copies each tile's block of `blocks` (rows from the tile's bottom) to its place in
+/// `image`, the pixels of `region` top row first, of an image `height` rows high; a
+/// tile's pixels outside the region are left out.
+fn place<T: Copy>(tiles: &[Tile], blocks: &[T], region: Region, height: u32, image: &mut [T]) {
+    let block = (TILE * TILE) as usize;
+    for (tile, values) in tiles.iter().zip(blocks.chunks(block)) {
+        for (k, value) in values[..(tile.width * tile.height) as usize]
+            .iter()
+            .enumerate()
+        {
+            let (x, y) = (
+                tile.x + k as u32 % tile.width,
+                tile.y + k as u32 / tile.width,
+            );
+            let row = height - 1 - y;
+            if region.contains(x, row) {
+                image[((row - region.y0) * region.width() + x - region.x0) as usize] = *value;
+            }
+        }
+    }
+}
+
+/// The pixels of the whole frame's tiles that meet `region` of a `width` x `height`
+/// image, as a region: `region` grown to the tiles' edges, which lie every [`TILE`]
+/// pixels from the image's left column and bottom row.
+fn whole_tiles(region: Region, width: u32, height: u32) -> Region {
+    let down = |n: u32| n / TILE * TILE;
+    let up = |n: u32, end: u32| n.div_ceil(TILE).saturating_mul(TILE).min(end);
+    // Rows counted from the bottom, as tiles count them.
+    let (bottom, top) = (down(height - region.y1), up(height - region.y0, height));
+    Region {
+        x0: down(region.x0),
+        x1: up(region.x1, width),
+        y0: height - top,
+        y1: height - bottom,
+    }
 }
 
 /// A block of pixels; `y` counts rows from the bottom of the image.
@@ -337,14 +443,15 @@ thread_local! {
 const PACKET_WIDTH: u32 = 4;
 const PACKET_HEIGHT: u32 = 2;
 
-/// Writes the pixels of one tile into `pixels`, row by row from its bottom row, and
-/// returns the rays they took.
-fn render_tile(
+/// Writes the pixels of one tile into `pixels` and their rays' work into `work`, row by
+/// row from its bottom row, and returns the rays they took.
+fn render_tile<C: Count>(
     shader: &Shader,
     camera: &Camera,
     options: &RenderOptions,
     tile: Tile,
     pixels: &mut [Vec3],
+    work: &mut [Work<C>],
 ) -> RayCounts {
     let mut rays = RayCounts::default();
     let grid = options.sampling.grid();
@@ -388,7 +495,7 @@ fn render_tile(
             grid,
             film_sample,
             arena,
-            sums,
+            (sums, work),
             &mut rays,
         );
         let samples = grid.cells() as f32;
@@ -399,11 +506,12 @@ fn render_tile(
     })
 }
 
-/// Adds the colour of every sample of every pixel of `tile` into `sums` (row by row from
-/// the tile's bottom row), one ray at a time or as streams as `options.mode` says; scratch
-/// space comes from `arena`.
+/// Adds the colour and the rays' work of every sample of every pixel of `tile` into
+/// `sums` and `work` (row by row from the tile's bottom row), one ray at a time or as
+/// streams as `options.mode` says, and counts the rays into `rays`; scratch space comes
+/// from `arena`.
 #[allow(clippy::too_many_arguments)] // the tile's setting, its scratch and its sums
-fn trace_tile(
+fn trace_tile<C: Count>(
     shader: &Shader,
     camera: &Camera,
     options: &RenderOptions,
@@ -411,12 +519,12 @@ fn trace_tile(
     grid: SampleGrid,
     film_sample: impl Fn(u32, u32, u32, u32) -> (FilmSample, Sample),
     arena: &Bump,
-    sums: &mut [Vec3],
+    (sums, work): (&mut [Vec3], &mut [Work<C>]),
     rays: &mut RayCounts,
 ) {
     match options.mode {
         RenderMode::Scalar => {
-            for (i, sum) in sums.iter_mut().enumerate() {
+            for (i, (sum, pixel_work)) in sums.iter_mut().zip(work.iter_mut()).enumerate() {
                 let (x, y) = (
                     tile.x + i as u32 % tile.width,
                     tile.y + i as u32 / tile.width,
@@ -425,7 +533,8 @@ fn trace_tile(
                     for p in 0..grid.columns {
                         let (film, sample) = film_sample(x, y, p, q);
                         let ray = camera.ray(&film);
-                        *sum += shader.trace(&ray, RayKind::Primary, &sample, 1, 1.0, rays);
+                        let counts = (&mut *rays, &mut *pixel_work);
+                        *sum += shader.trace(&ray, RayKind::Primary, &sample, 1, 1.0, counts);
                     }
                 }
             }
@@ -471,7 +580,7 @@ fn trace_tile(
                     primary.push_primary(rays.ray(k), sample, pixel);
                 }
             }
-            stream::trace(shader, arena, primary, sums, rays);
+            stream::trace(shader, arena, primary, (sums, work), rays);
         }
     }
 }

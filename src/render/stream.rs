@@ -11,7 +11,9 @@
 //! as the scalar path. A depth queues its reflected rays, then its transmitted ones. Once
 //! the deepest queue is shaded, colours flow back up: each ray's colour, clamped if it
 //! hit something, is added to its parent's with its weight, in the order the scalar
-//! [`Shader::trace`] adds them, so the image is the scalar one byte for byte.
+//! [`Shader::trace`] adds them, so the image is the scalar one byte for byte. Where the
+//! render counts (`C` of [`crate::accel::count`]), each ray's work flows up with its
+//! colour, so that a pixel's cost is what its samples' rays took.
 
 use bumpalo::collections::Vec as ArenaVec;
 use bumpalo::Bump;
@@ -19,7 +21,8 @@ use glam::Vec3;
 
 use super::light::Receiver;
 use super::sampler::Sample;
-use super::shade::{Bounce8, Optics8, Phong8, Profile, RayCounts, RayKind, Shader, EPS};
+use super::shade::{Bounce8, Optics8, Phong8, Profile, RayCounts, RayKind, Shader, Work, EPS};
+use crate::accel::count::{Count, CountLanes};
 use crate::accel::stream::{self, Answers};
 use crate::intersect::spawn_origin8;
 use crate::prim::{PrimId, PrimKind};
@@ -27,7 +30,7 @@ use crate::ray::{Hit, Ray};
 use crate::simd::{for_lanes, F32x8, Mask8, Vec3x8};
 
 /// The rays of one depth, and what they bring back.
-pub(super) struct Queue<'a> {
+pub(super) struct Queue<'a, C> {
     rays: ArenaVec<'a, Ray>,
     samples: ArenaVec<'a, Sample>,
     /// The index of the medium each ray travels in.
@@ -42,9 +45,14 @@ pub(super) struct Queue<'a> {
     colour: ArenaVec<'a, Vec3>,
     /// Whether each ray hit something (only hits clamp their colour).
     hit: ArenaVec<'a, bool>,
+    /// Below depth 1, the rays before this index are reflected, the others transmitted.
+    reflected: usize,
+    /// Where the render counts, each ray's work by kind: its own, its shadow rays' and
+    /// its children's, added as they are traced; empty otherwise.
+    work: ArenaVec<'a, Work<C>>,
 }
 
-impl<'a> Queue<'a> {
+impl<'a, C: Count> Queue<'a, C> {
     /// A queue with room for `capacity` rays: growing a vector in an arena copies it and
     /// leaves the old one behind, so queues are made at the size they may reach.
     pub(super) fn with_capacity_in(capacity: usize, arena: &'a Bump) -> Self {
@@ -56,6 +64,8 @@ impl<'a> Queue<'a> {
             weight: ArenaVec::with_capacity_in(capacity, arena),
             colour: ArenaVec::with_capacity_in(capacity, arena),
             hit: ArenaVec::with_capacity_in(capacity, arena),
+            reflected: 0,
+            work: ArenaVec::with_capacity_in(if C::ON { capacity } else { 0 }, arena),
         }
     }
 
@@ -77,7 +87,7 @@ impl<'a> Queue<'a> {
     }
 
     /// Queues the rays of `other` (not yet traced) after its own.
-    fn append(&mut self, other: &Queue) {
+    fn append(&mut self, other: &Queue<C>) {
         self.rays.extend_from_slice(&other.rays);
         self.samples.extend_from_slice(&other.samples);
         self.ior.extend_from_slice(&other.ior);
@@ -96,12 +106,13 @@ impl<'a> Queue<'a> {
 }
 
 /// Traces the primary samples of `primary` and every ray they spawn, and adds each
-/// sample's colour to `sums` at its pixel, in queue order.
-pub(super) fn trace<'a>(
+/// sample's colour to `sums` and its rays' work to `work` at its pixel, in queue order;
+/// `rays` counts the rays traced.
+pub(super) fn trace<'a, C: Count>(
     shader: &Shader,
     arena: &'a Bump,
-    primary: Queue<'a>,
-    sums: &mut [Vec3],
+    primary: Queue<'a, C>,
+    (sums, work): (&mut [Vec3], &mut [Work<C>]),
     rays: &mut RayCounts,
 ) {
     rays.add(RayKind::Primary, primary.len() as u64);
@@ -120,12 +131,20 @@ pub(super) fn trace<'a>(
         match depths.last_mut() {
             Some(parents) => {
                 for i in 0..queue.len() {
-                    parents.colour[queue.parent[i] as usize] += queue.weight[i] * queue.seen(i);
+                    let parent = queue.parent[i] as usize;
+                    parents.colour[parent] += queue.weight[i] * queue.seen(i);
+                    if C::ON {
+                        parents.work[parent].merge(&queue.work[i]);
+                    }
                 }
             }
             None => {
                 for i in 0..queue.len() {
-                    sums[queue.parent[i] as usize] += queue.seen(i);
+                    let pixel = queue.parent[i] as usize;
+                    sums[pixel] += queue.seen(i);
+                    if C::ON {
+                        work[pixel].merge(&queue.work[i]);
+                    }
                 }
             }
         }
@@ -134,17 +153,25 @@ pub(super) fn trace<'a>(
 
 /// Traces the rays of `queue`, which are of `depth`, and their shadow rays, sets each
 /// one's local colour, and returns the queue of the rays their hits spawn.
-fn shade_depth<'a>(
+fn shade_depth<'a, C: Count>(
     shader: &Shader,
     arena: &'a Bump,
-    queue: &mut Queue<'a>,
+    queue: &mut Queue<'a, C>,
     depth: u32,
     rays: &mut RayCounts,
-) -> Queue<'a> {
+) -> Queue<'a, C> {
     let n = queue.len();
     let mut hits = ArenaVec::with_capacity_in(n, arena);
     let geometry = &shader.tracer.geometry;
-    stream::closest(shader.tracer, &queue.rays, |_, found| {
+    let (work, reflected) = (&mut queue.work, queue.reflected);
+    stream::closest_counting::<_, C>(shader.tracer, &queue.rays, |_, found, lanes| {
+        if C::ON {
+            for k in 0..found.len() {
+                let mut own = Work::default();
+                own.add(ray_kind(depth, hits.len() + k, reflected), &lanes.lane(k));
+                work.push(own);
+            }
+        }
         hits.extend_from_slice(found);
         // Shaded once the whole depth is traced: its record reaches the cache meanwhile.
         for hit in found.iter().flatten() {
@@ -234,9 +261,20 @@ fn shade_depth<'a>(
         }
         rays.add(RayKind::Reflection, next.len() as u64);
         rays.add(RayKind::Refraction, transmitted.len() as u64);
+        next.reflected = next.len();
         next.append(&transmitted);
     }
     next
+}
+
+/// The kind of ray `i` of a queue of depth `depth` whose first `reflected` rays are
+/// reflected ones.
+fn ray_kind(depth: u32, i: usize, reflected: usize) -> RayKind {
+    match depth {
+        1 => RayKind::Primary,
+        _ if i < reflected => RayKind::Reflection,
+        _ => RayKind::Refraction,
+    }
 }
 
 /// Eight hits of a depth as structure of arrays, for the shading of eight at a time.
@@ -378,13 +416,27 @@ impl<'a> ShadowQueue<'a> {
     /// Sets up every hit's shadow ray to every light, eight hits at a time, and traces
     /// them light by light, packed eight at a time as they are made
     /// ([`stream::Packer`]: the stream scheduler's packets of a stream grouped by light).
-    fn trace(shader: &Shader, arena: &'a Bump, queue: &Queue, blocks: &[HitBlock]) -> Self {
+    /// Where the render counts, each shadow ray's work goes to the ray whose hit it leaves.
+    fn trace<C: Count>(
+        shader: &Shader,
+        arena: &'a Bump,
+        queue: &mut Queue<C>,
+        blocks: &[HitBlock],
+    ) -> Self {
         let lights = shader.lights.len();
         let mut dir = ArenaVec::with_capacity_in(lights * blocks.len(), arena);
         let mut lit = ArenaVec::with_capacity_in(lights * blocks.len(), arena);
         let mut colour = ArenaVec::with_capacity_in(lights, arena);
         let mut packer = stream::Packer::new(shader.tracer);
         let mut traced = 0;
+        let (samples, rays, work) = (&queue.samples, &queue.rays, &mut queue.work);
+        // The work of the shadow ray tagged `tag` (its entry and lane, below).
+        let mut counted = |tag: u32, count: C| {
+            let block = &blocks[(tag >> 3) as usize % blocks.len()];
+            work[block.ray[(tag & 7) as usize] as usize]
+                .shadow
+                .add(&count);
+        };
         for (index, emitter) in shader.lights.iter().enumerate() {
             colour.push(emitter.colour());
             for block in blocks {
@@ -393,7 +445,7 @@ impl<'a> ShadowQueue<'a> {
                     normal: block.nf,
                     origin: block.origin,
                 };
-                let sample = |k: usize| queue.samples[block.ray[k] as usize];
+                let sample = |k: usize| samples[block.ray[k] as usize];
                 let (facing, incident) = emitter.sample8(index, &receiver, sample);
                 let facing = facing.bitmask() & block.lanes;
                 let entry = lit.len() as u32;
@@ -404,21 +456,23 @@ impl<'a> ShadowQueue<'a> {
                     let ray = Ray {
                         origin: block.origin.lane(k),
                         dir: incident.dir.lane(k),
-                        time: queue.rays[block.ray[k] as usize].time,
+                        time: rays[block.ray[k] as usize].time,
                     };
                     // The ray's entry (light and block) and lane, for `unlit`.
                     let tag = entry << 3 | k as u32;
                     let distance = incident.distance.lane(k);
-                    packer.push(
-                        &ray,
-                        distance,
-                        tag,
-                        &mut Answers::blocked(|tag| unlit(&mut lit, tag)),
-                    );
+                    let mut answer = Answers {
+                        blocked: |tag| unlit(&mut lit, tag),
+                        counted: &mut counted,
+                    };
+                    packer.push(&ray, distance, tag, &mut answer);
                 });
             }
         }
-        packer.flush(&mut Answers::blocked(|tag| unlit(&mut lit, tag)));
+        packer.flush(&mut Answers {
+            blocked: |tag| unlit(&mut lit, tag),
+            counted: &mut counted,
+        });
         ShadowQueue {
             lights,
             dir,

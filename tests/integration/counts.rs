@@ -64,6 +64,7 @@ fn brute_force_tests_every_primitive_once_per_ray() {
             assert_eq!(
                 count,
                 Tally {
+                    rays: 1,
                     prims: primitives,
                     ..Tally::default()
                 },
@@ -92,6 +93,7 @@ fn a_ray_through_empty_space_goes_no_further_than_the_root() {
         assert_eq!(
             count,
             Tally {
+                rays: 1,
                 boxes: 1,
                 ..Tally::default()
             },
@@ -245,4 +247,243 @@ fn bench_stats_count_every_set_along_every_path() {
             );
         }
     }
+}
+
+/// The sum of the counts of a cost EXR (`render --cost`): its one channel, Y.
+fn exr_sum(path: &std::path::Path) -> f64 {
+    let bytes = std::fs::read(path).expect("the cost image");
+    let part = p3trace::farm::read_part(&bytes, "cost").expect("a cost part");
+    part.pixels.iter().map(|p| f64::from(p.x)).sum()
+}
+
+fn json_file(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).expect("JSON")
+}
+
+#[test]
+fn a_cost_image_sums_to_the_frames_work_in_every_mode_and_effect() {
+    let dir = common::scratch("counts_cost_sums");
+    let showcase = common::project_file("scenes/showcase.p3f")
+        .display()
+        .to_string();
+    let dof = common::project_file("scenes/dof.p3f").display().to_string();
+    let effects: [(&str, &[&str]); 4] = [
+        (&showcase, &[]),
+        (
+            &showcase,
+            &["--spp", "4", "--soft-shadows", "--roughness", "0.2"],
+        ),
+        (&showcase, &["--mode", "scalar", "--accel", "grid"]),
+        (&dof, &["--spp", "2", "--accel", "none"]),
+    ];
+    for (k, (scene, extra)) in effects.iter().enumerate() {
+        for (rays, kind) in [("all", "all"), ("primary", "primary")] {
+            let (exr, json) = (
+                dir.join(format!("{k}{rays}.exr")),
+                dir.join(format!("{k}{rays}.json")),
+            );
+            let mut args = vec![
+                "render",
+                scene,
+                "--resolution",
+                "40x30",
+                "--no-skybox",
+                "-q",
+                "--cost",
+                "prims",
+                "--cost-rays",
+                rays,
+                "-o",
+                exr.to_str().unwrap(),
+                "--json",
+                json.to_str().unwrap(),
+            ];
+            args.extend_from_slice(extra);
+            common::succeeds(&args);
+            let work = &json_file(&json)["work"];
+            let total = work["by_kind"][kind]["prims"]["total"].as_f64().unwrap();
+            assert!(total > 0.0, "{extra:?} {rays}");
+            assert_eq!(exr_sum(&exr), total, "{extra:?} {rays}");
+        }
+    }
+}
+
+#[test]
+fn cost_images_do_not_depend_on_threads_or_tiles_and_merge_exactly() {
+    let dir = common::scratch("counts_cost_farm");
+    let scene = common::project_file("scenes/showcase.p3f")
+        .display()
+        .to_string();
+    let render = |name: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let mut args = vec![
+            "render",
+            &scene,
+            "--resolution",
+            "48x36",
+            "--no-skybox",
+            "-q",
+            "--cost",
+            "leaves",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        common::succeeds(&args);
+        std::fs::read(out).unwrap()
+    };
+    let whole = render("whole.exr", &["--threads", "1"]);
+    assert!(
+        render("two.exr", &["--threads", "2"]) == whole,
+        "two threads differ from one"
+    );
+    for t in 0..3 {
+        render(
+            &format!("tile{t}.exr"),
+            &["--tile", &format!("{t}/3"), "--threads", "2"],
+        );
+    }
+    let merged = dir.join("merged.exr");
+    let parts: Vec<String> = (0..3)
+        .map(|t| dir.join(format!("tile{t}.exr")).display().to_string())
+        .collect();
+    let mut args = vec!["merge", "-o", merged.to_str().unwrap()];
+    args.extend(parts.iter().map(String::as_str));
+    common::succeeds(&args);
+    assert!(
+        std::fs::read(&merged).unwrap() == whole,
+        "the merged tiles differ from the frame"
+    );
+    // The merged parts also make the picture, on a fixed scale if asked.
+    let picture = dir.join("merged.png");
+    let mut args = vec!["merge", "-o", picture.to_str().unwrap(), "--cost-max", "10"];
+    args.extend(parts.iter().map(String::as_str));
+    common::succeeds(&args);
+    let png = image::open(&picture).unwrap();
+    assert_eq!(png.height(), 36);
+    assert!(png.width() > 48, "the scale beside the image");
+
+    // Colour parts and cost parts never mix, and a colour merge takes no scale.
+    let colour = dir.join("colour.exr");
+    common::succeeds(&[
+        "render",
+        &scene,
+        "--resolution",
+        "48x36",
+        "--no-skybox",
+        "-q",
+        "--tile",
+        "0/3",
+        "-o",
+        colour.to_str().unwrap(),
+    ]);
+    let mixed = common::p3trace(&[
+        "merge",
+        "-o",
+        picture.to_str().unwrap(),
+        colour.to_str().unwrap(),
+        &parts[1],
+        &parts[2],
+    ]);
+    assert_eq!(mixed.status.code(), Some(2), "{}", common::stderr(&mixed));
+    assert!(
+        common::stderr(&mixed).contains("different renders"),
+        "{}",
+        common::stderr(&mixed)
+    );
+    let scaled = common::p3trace(&[
+        "merge",
+        "--cost-max",
+        "3",
+        "-o",
+        picture.to_str().unwrap(),
+        colour.to_str().unwrap(),
+    ]);
+    assert_eq!(scaled.status.code(), Some(2));
+    assert!(
+        common::stderr(&scaled).contains("colour image"),
+        "{}",
+        common::stderr(&scaled)
+    );
+}
+
+#[test]
+fn a_cost_image_is_refused_where_it_cannot_apply() {
+    let scene = common::project_file("scenes/balls_low.p3f")
+        .display()
+        .to_string();
+    let refused = |extra: &[&str], says: &str| {
+        let mut args = vec!["render", &scene, "--resolution", "16x12", "-q"];
+        args.extend_from_slice(extra);
+        let run = common::p3trace(&args);
+        assert_eq!(run.status.code(), Some(2), "{extra:?}");
+        assert!(
+            common::stderr(&run).contains(says),
+            "{extra:?}: {}",
+            common::stderr(&run)
+        );
+    };
+    refused(&["--cost", "triangles", "-o", "x.png"], "invalid value");
+    refused(&["--cost", "cells", "-o", "x.png"], "--accel grid");
+    refused(
+        &["--cost", "nodes", "--accel", "grid", "-o", "x.png"],
+        "the grid counts no",
+    );
+    refused(
+        &["--cost", "boxes", "--accel", "none", "-o", "x.png"],
+        "only prims",
+    );
+    refused(
+        &["--cost", "prims", "-o", "x.hdr"],
+        "use .exr for the counts",
+    );
+    refused(&["--cost-max", "5", "-o", "x.png"], "--cost");
+}
+
+#[test]
+fn compare_gives_the_ratio_of_two_cost_images() {
+    let dir = common::scratch("counts_cost_compare");
+    let scene = common::project_file("scenes/balls_low.p3f")
+        .display()
+        .to_string();
+    let cost = |name: &str, accel: &str| {
+        let out = dir.join(name).display().to_string();
+        common::succeeds(&[
+            "render",
+            &scene,
+            "--resolution",
+            "32x32",
+            "-q",
+            "--cost",
+            "prims",
+            "--accel",
+            accel,
+            "-o",
+            &out,
+        ]);
+        out
+    };
+    let (bvh, brute) = (cost("bvh.exr", "bvh"), cost("none.exr", "none"));
+    let run = common::succeeds(&["compare", &bvh, &brute]);
+    let text = String::from_utf8_lossy(&run.stdout).into_owned();
+    let ratio: f64 = text
+        .lines()
+        .find_map(|l| l.strip_prefix("ratio (second / first): "))
+        .expect("a ratio")
+        .parse()
+        .unwrap();
+    assert!(ratio > 1.0, "brute force tests more than the BVH: {text}");
+    assert!(text.contains("(none, stream mode)"), "{text}");
+    let colour = dir.join("colour.png").display().to_string();
+    common::succeeds(&[
+        "render",
+        &scene,
+        "--resolution",
+        "32x32",
+        "-q",
+        "-o",
+        &colour,
+    ]);
+    let mixed = common::p3trace(&["compare", &bvh, &colour]);
+    assert_eq!(mixed.status.code(), Some(2), "{}", common::stderr(&mixed));
 }

@@ -32,7 +32,9 @@ impl Bvh8 {
     }
 
     /// Whether a primitive of leaf `child` blocks `query` within `(t_min, t_max)`.
-    #[inline]
+    /// Inlined into the walks, as it was before they counted: out of line, the scalar
+    /// render ran 0.9% more instructions (callgrind, dragon).
+    #[inline(always)]
     pub(super) fn blocks<C: Count>(
         &self,
         geometry: &Geometry,
