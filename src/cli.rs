@@ -335,11 +335,17 @@ pub struct RenderArgs {
     #[arg(long, value_name = "RAYS", value_parser = one_of(COST_RAYS), default_value = "all",
           requires = "cost")]
     pub cost_rays: CostRays,
-    /// The count at the top of a cost picture's scale (larger counts take its colour), so
-    /// that pictures of two structures share one scale. Default: the image's largest count.
+    /// The count at the top of a cost picture's scale (larger counts take its colour, and
+    /// its label gets a +), so that pictures of two structures share one scale. Default:
+    /// the 99th percentile of the image's counts.
     #[arg(long, value_name = "N", value_parser = parse_cost_max, requires = "cost",
           allow_negative_numbers = true)]
     pub cost_max: Option<f32>,
+    /// How a cost picture's colours follow the counts: linear, or log (the logarithm of
+    /// 1 + the count, for structures whose counts differ tenfold on one scale).
+    #[arg(long, value_name = "SCALE", value_parser = one_of(COST_SCALES),
+          default_value = "linear", requires = "cost", action = clap::ArgAction::Set)]
+    pub cost_scale: bool,
     /// Write the run's statistics as one JSON object to FILE, or to standard output for
     /// `-` (the closing line then goes to stderr): version, commit, CPU, scene, size,
     /// samples, structure, build and render seconds, rays by kind, Mrays/s.
@@ -369,10 +375,13 @@ pub struct MergeArgs {
           value_parser = whole::<u32>(1..=u32::MAX.into()))]
     pub tiles: Option<u32>,
     /// For parts of a cost image (`render --cost`): the count at the top of the merged
-    /// picture's scale, as `render --cost-max` (default: the frame's largest count).
-    /// Refused for parts of a colour image.
+    /// picture's scale, as `render --cost-max` (default: the 99th percentile of the
+    /// frame's counts). Refused for parts of a colour image.
     #[arg(long, value_name = "N", value_parser = parse_cost_max, allow_negative_numbers = true)]
     pub cost_max: Option<f32>,
+    /// For parts of a cost image: linear or log, as `render --cost-scale`.
+    #[arg(long, value_name = "SCALE", value_parser = one_of(COST_SCALES))]
+    pub cost_scale: Option<bool>,
 }
 
 #[derive(Args, Debug)]
@@ -475,6 +484,8 @@ const COUNTERS: &[(&str, Counter)] = &[
     ("cells", Counter::Cells),
 ];
 const COST_RAYS: &[(&str, CostRays)] = &[("all", CostRays::All), ("primary", CostRays::Primary)];
+/// Whether a cost picture's scale is logarithmic.
+const COST_SCALES: &[(&str, bool)] = &[("linear", false), ("log", true)];
 const UP_AXES: &[(&str, Up)] = &[("y", Up::Y), ("z", Up::Z)];
 
 /// Parses one of `values` by its name; help, the man page and the completions list the

@@ -251,7 +251,11 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     match (&cost, &report.work) {
         (Some(map), Some(work)) => {
             let film = map.film(work, region.width(), region.height());
-            cost::write(&film, &output, &placement, map, args.cost_max)
+            let scale = cost::Scale {
+                max: args.cost_max,
+                log: args.cost_scale,
+            };
+            cost::write(&film, &output, &placement, map, scale)
         }
         _ => report.film.write_placed(&output, &placement),
     }
@@ -718,11 +722,14 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
         };
     };
     let cost = CostMap::from_note(&canvas.identity).map_err(Failure::Usage)?;
-    if cost.is_none() && args.cost_max.is_some() {
-        return Err(Failure::Usage(
-            "--cost-max: the parts are of a colour image, not of a cost image (render --cost)"
-                .into(),
-        ));
+    let scaled = [
+        (args.cost_max.is_some(), "--cost-max"),
+        (args.cost_scale.is_some(), "--cost-scale"),
+    ];
+    if let Some((_, flag)) = scaled.iter().find(|(given, _)| cost.is_none() && *given) {
+        return Err(Failure::Usage(format!(
+            "{flag}: the parts are of a colour image, not of a cost image (render --cost)"
+        )));
     }
     let tile_count = args.tiles.or_else(|| canvas.tile_count());
     if args.missing {
@@ -762,7 +769,13 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
         .ok_or_else(|| Failure::Usage("merge needs -o FILE".into()))?;
     let placement = canvas.placement();
     match cost {
-        Some(map) => cost::write(&canvas.film, output, &placement, &map, args.cost_max),
+        Some(map) => {
+            let scale = cost::Scale {
+                max: args.cost_max,
+                log: args.cost_scale.unwrap_or(false),
+            };
+            cost::write(&canvas.film, output, &placement, &map, scale)
+        }
         None => canvas.film.write_placed(output, &placement),
     }
     .map_err(Failure::Run)?;

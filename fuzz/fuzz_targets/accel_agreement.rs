@@ -290,18 +290,25 @@ fuzz_target!(|input: Input| {
         scene.camera.aperture = 2.0;
     }
     let mut reference: Option<Vec<u32>> = None;
-    for (kind, mode) in [
-        (AccelKind::None, RenderMode::Scalar),
-        (AccelKind::Bvh, RenderMode::Scalar),
-        (AccelKind::None, RenderMode::Stream),
-        (AccelKind::Grid, RenderMode::Stream),
-        (AccelKind::Bvh, RenderMode::Stream),
+    // The last two count their walks' work (render --stats, --cost), which must change
+    // no pixel, and count a ray for every ray traced.
+    for (kind, mode, count) in [
+        (AccelKind::None, RenderMode::Scalar, false),
+        (AccelKind::Bvh, RenderMode::Scalar, false),
+        (AccelKind::None, RenderMode::Stream, false),
+        (AccelKind::Grid, RenderMode::Stream, false),
+        (AccelKind::Bvh, RenderMode::Stream, false),
+        (AccelKind::Grid, RenderMode::Scalar, true),
+        (AccelKind::Bvh, RenderMode::Stream, true),
     ] {
         options.accel.kind = kind;
         options.mode = mode;
-        let film = render(&scene, &options)
-            .expect("a small image renders")
-            .film;
+        options.count = count;
+        let report = render(&scene, &options).expect("a small image renders");
+        if let Some(work) = &report.work {
+            assert_eq!(u64::from(work.by_kind().total().rays), report.rays.total());
+        }
+        let film = report.film;
         let bits: Vec<u32> = film
             .pixels
             .iter()

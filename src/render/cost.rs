@@ -74,21 +74,59 @@ impl CostMap {
     }
 }
 
+/// How a picture shows counts: from 0 at the bottom of its colour bar to a top, linearly
+/// or on a logarithmic scale (of 1 plus the count, so that 0 stays at the bottom).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Scale {
+    /// The top: the count drawn in the bar's top colour, which larger counts take too.
+    /// `None`: the 99th percentile of the image's counts (at least 1), so that a few
+    /// pixels of very many rays (a glass sphere's rim) do not leave the rest dark.
+    pub max: Option<f32>,
+    pub log: bool,
+}
+
+impl Scale {
+    /// The top of the scale for the counts of `film`.
+    fn top(&self, film: &Film) -> f32 {
+        self.max.unwrap_or_else(|| {
+            let mut counts: Vec<f32> = film.pixels.iter().map(|p| p.x).collect();
+            let rank = (counts.len() * 99 / 100).min(counts.len().saturating_sub(1));
+            let (_, at, _) = counts.select_nth_unstable_by(rank, f32::total_cmp);
+            at.max(1.0)
+        })
+    }
+
+    /// Where `count` lies on a scale whose top is `top`: 0 at the bottom, 1 at the top.
+    fn share(&self, count: f32, top: f32) -> f32 {
+        match self.log {
+            true => count.ln_1p() / top.ln_1p(),
+            false => count / top,
+        }
+    }
+
+    /// The count at share `t` of a scale whose top is `top`.
+    fn count_at(&self, t: f32, top: f32) -> f32 {
+        match self.log {
+            true => (t * top.ln_1p()).exp_m1(),
+            false => t * top,
+        }
+    }
+}
+
 /// Writes the cost image `film` to `path` in the format of its extension: PNG and PPM as
-/// the picture ([`picture`], `max` the top of its scale, the image's largest count
-/// without it), EXR as the raw counts with `placement`. HDR is refused: a cost image is
-/// a picture or counts.
+/// the picture ([`picture`], on `scale`), EXR as the raw counts with `placement`. HDR is
+/// refused: a cost image is a picture or counts.
 pub fn write(
     film: &Film,
     path: &Path,
     placement: &Placement,
     map: &CostMap,
-    max: Option<f32>,
+    scale: Scale,
 ) -> Result<(), String> {
     match OutputFormat::from_path(path)? {
         OutputFormat::Exr => film.write_counts(path, placement),
         OutputFormat::Hdr => Err(refuse_hdr(path)),
-        OutputFormat::Png | OutputFormat::Ppm => picture(film, map, max).write(path),
+        OutputFormat::Png | OutputFormat::Ppm => picture(film, map, scale).write(path),
     }
 }
 
@@ -100,36 +138,30 @@ pub fn refuse_hdr(path: &Path) -> String {
     )
 }
 
-/// The top of the scale of a picture of `film`: `max`, or the 99th percentile of its
-/// counts (at least 1), so that a few pixels of very many rays (a glass sphere's rim)
-/// do not leave the rest of the picture dark; the counts above it take its colour, and
-/// its label says so with a `+`.
-pub fn scale_top(film: &Film, max: Option<f32>) -> f32 {
-    max.unwrap_or_else(|| {
-        let mut counts: Vec<f32> = film.pixels.iter().map(|p| p.x).collect();
-        let rank = (counts.len() * 99 / 100).min(counts.len().saturating_sub(1));
-        let (_, at, _) = counts.select_nth_unstable_by(rank, f32::total_cmp);
-        at.max(1.0)
-    })
-}
-
 /// The false-colour picture of the cost image `film`: each count on viridis from 0 to the
-/// top of the scale ([`scale_top`]; counts above it take its colour), and to its right a
-/// strip with the counter's name, the colour bar and the counts at its ticks.
-pub fn picture(film: &Film, map: &CostMap, max: Option<f32>) -> Film {
-    let top = scale_top(film, max);
+/// top of `scale` (counts above it take its colour, and its label says so with a `+`),
+/// and to its right a strip with the counter's name, the colour bar and the counts at
+/// its ticks.
+pub fn picture(film: &Film, map: &CostMap, scale: Scale) -> Film {
+    let top = scale.top(film);
     let beyond = film.pixels.iter().any(|p| p.x > top);
-    // Text twice as large on large images.
-    let scale = if film.height >= 300 { 2 } else { 1 };
-    let glyph = (GLYPH_W + 1) * scale;
-    let mut labels: Vec<String> = TICKS.iter().map(|&t| count_label(t * top, top)).collect();
+    let mut labels: Vec<String> = TICKS
+        .iter()
+        .map(|&t| count_label(scale.count_at(t, top), top))
+        .collect();
     if beyond {
         labels[TICKS.len() - 1].push('+');
     }
+    let mut title = map.counter.name().to_ascii_uppercase();
+    if scale.log {
+        title.push_str(" LOG");
+    }
+    // Text twice as large on large images.
+    let text_scale = if film.height >= 300 { 2 } else { 1 };
+    let glyph = (GLYPH_W + 1) * text_scale;
     let longest = labels.iter().map(String::len).max().unwrap_or(1) as u32;
-    let margin = 4 * scale;
-    let bar_width = 10 * scale;
-    let title = map.counter.name().to_ascii_uppercase();
+    let margin = 4 * text_scale;
+    let bar_width = 10 * text_scale;
     let strip =
         (margin * 3 + bar_width + longest * glyph).max(2 * margin + title.len() as u32 * glyph);
     let width = film.width + strip;
@@ -137,7 +169,7 @@ pub fn picture(film: &Film, map: &CostMap, max: Option<f32>) -> Film {
     for row in 0..film.height {
         for x in 0..film.width {
             let count = film.get(x, row).x;
-            out.pixels[(row * width + x) as usize] = viridis(count / top);
+            out.pixels[(row * width + x) as usize] = viridis(scale.share(count, top));
         }
     }
     // The strip: dark grey, the title at the top, the bar below it to the bottom margin.
@@ -146,11 +178,11 @@ pub fn picture(film: &Film, map: &CostMap, max: Option<f32>) -> Film {
             out.pixels[(row * width + x) as usize] = Vec3::splat(0.12);
         }
     }
-    let text_height = GLYPH_H * scale;
+    let text_height = GLYPH_H * text_scale;
     let bar_top = margin + text_height + margin;
     let bar_bottom = film.height.saturating_sub(margin + text_height / 2);
     let x0 = film.width + margin;
-    draw_text(&mut out, &title, x0, margin, scale);
+    draw_text(&mut out, &title, x0, margin, text_scale);
     if bar_bottom <= bar_top + 1 {
         return out;
     }
@@ -170,8 +202,8 @@ pub fn picture(film: &Film, map: &CostMap, max: Option<f32>) -> Film {
         let y = centre
             .saturating_sub(text_height / 2)
             .clamp(bar_top, bar_bottom.saturating_sub(text_height).max(bar_top));
-        if last_drawn.is_none_or(|above| y >= above + text_height + scale) {
-            draw_text(&mut out, label, label_x, y, scale);
+        if last_drawn.is_none_or(|above| y >= above + text_height + text_scale) {
+            draw_text(&mut out, label, label_x, y, text_scale);
             last_drawn = Some(y);
         }
     }
@@ -246,6 +278,7 @@ fn glyph(c: char) -> Option<[u8; 7]> {
         'C' => [0x0E, 0x11, 0x10, 0x10, 0x10, 0x11, 0x0E],
         'D' => [0x1E, 0x11, 0x11, 0x11, 0x11, 0x11, 0x1E],
         'E' => [0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x1F],
+        'G' => [0x0E, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0F],
         'I' => [0x0E, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0E],
         'L' => [0x10, 0x10, 0x10, 0x10, 0x10, 0x10, 0x1F],
         'M' => [0x11, 0x1B, 0x15, 0x15, 0x11, 0x11, 0x11],
@@ -327,17 +360,30 @@ mod tests {
             counter: Counter::Prims,
             rays: CostRays::All,
         };
-        let picture = picture(&film, &map, None);
+        let picture = picture(&film, &map, Scale::default());
         assert_eq!(picture.height, 100);
         assert!(picture.width > 64 + 30, "{}", picture.width);
         // The image's pixels on the scale, its largest count at the top.
         assert_eq!(picture.get(0, 0), viridis(0.0));
         assert_eq!(picture.get(63, 50), viridis(1.0));
         // A fixed scale saturates larger counts.
-        let fixed = super::picture(&film, &map, Some(32.0));
+        let fixed = Scale {
+            max: Some(32.0),
+            log: false,
+        };
+        let fixed = super::picture(&film, &map, fixed);
         assert_eq!(fixed.get(32, 0), viridis(1.0));
         assert_eq!(fixed.get(63, 0), viridis(1.0));
         assert_eq!(fixed.get(16, 0), viridis(0.5));
+        // On a log scale, 0 is still the bottom, and the geometric middle the middle.
+        let log = Scale {
+            max: Some(63.0),
+            log: true,
+        };
+        let log = super::picture(&film, &map, log);
+        assert_eq!(log.get(0, 0), viridis(0.0));
+        assert_eq!(log.get(63, 0), viridis(1.0));
+        assert!((log.get(7, 0) - viridis(0.5)).abs().max_element() < 1e-6);
         // The strip holds white text.
         let mut strip = (64..picture.width).flat_map(|x| (0..100).map(move |y| (x, y)));
         assert!(strip.any(|(x, y)| picture.get(x, y) == Vec3::ONE));
@@ -349,6 +395,6 @@ mod tests {
                 .chars()
                 .all(|c| glyph(c).is_some()));
         }
-        assert!("0123456789.+".chars().all(|c| glyph(c).is_some()));
+        assert!("0123456789.+ LOG".chars().all(|c| glyph(c).is_some()));
     }
 }

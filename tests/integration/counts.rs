@@ -300,7 +300,13 @@ fn a_cost_image_sums_to_the_frames_work_in_every_mode_and_effect() {
             ];
             args.extend_from_slice(extra);
             common::succeeds(&args);
-            let work = &json_file(&json)["work"];
+            let stats = json_file(&json);
+            let work = &stats["work"];
+            // Every ray traced is counted once, in the closing line's figures too.
+            assert_eq!(
+                work["by_kind"]["all"]["rays"], stats["rays"]["total"],
+                "{extra:?}"
+            );
             let total = work["by_kind"][kind]["prims"]["total"].as_f64().unwrap();
             assert!(total > 0.0, "{extra:?} {rays}");
             assert_eq!(exr_sum(&exr), total, "{extra:?} {rays}");

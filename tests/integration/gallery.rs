@@ -38,3 +38,43 @@ fn the_gallery_is_what_its_script_renders() {
         );
     }
 }
+
+/// `docs/cost/`, the cost images of the README and the benchmarking page, is what
+/// `scripts/cost-gallery.sh` renders; its dragon images need the course material, and
+/// are left out of the check without it.
+#[test]
+fn the_cost_images_are_what_their_script_renders() {
+    let out = scratch("cost_gallery");
+    let shared = crate::common::shared();
+    let mut script = Command::new(project_file("scripts/cost-gallery.sh"));
+    script
+        .env("P3TRACE", env!("CARGO_BIN_EXE_p3trace"))
+        .env("OUT", &out);
+    // Without the course material, point the script at a folder without it.
+    script.env(
+        "P3TRACE_SHARED",
+        shared.clone().unwrap_or_else(|| out.join("no-shared")),
+    );
+    let run = script.output().expect("the cost gallery script runs");
+    assert!(run.status.success(), "{}", stderr(&run));
+    let committed = project_file("docs/cost");
+    let mut names = file_names(&committed);
+    if shared.is_none() {
+        names.retain(|name| !name.starts_with("dragon_"));
+    }
+    assert!(
+        names.iter().any(|n| n.starts_with("balls_high_")),
+        "{names:?}"
+    );
+    assert_eq!(
+        file_names(&out),
+        names,
+        "the script's files against docs/cost/"
+    );
+    for name in &names {
+        assert!(
+            std::fs::read(out.join(name)).unwrap() == std::fs::read(committed.join(name)).unwrap(),
+            "docs/cost/{name} is not what scripts/cost-gallery.sh renders: run the script"
+        );
+    }
+}
