@@ -439,13 +439,6 @@ fn summarise(
 /// that counted anything: the rays of the pixels of the image (or region).
 fn work_lines(work: &RenderWork) -> Vec<String> {
     let w = work.by_kind();
-    let kinds = [
-        ("primary", w.primary),
-        ("shadow", w.shadow),
-        ("reflection", w.reflection),
-        ("refraction", w.refraction),
-        ("all", w.total()),
-    ];
     let total = w.total();
     let counters: Vec<Counter> = Counter::ALL
         .into_iter()
@@ -456,7 +449,7 @@ fn work_lines(work: &RenderWork) -> Vec<String> {
         head.push_str(&format!(" {:>14}", c.name()));
     }
     let mut lines = vec![head];
-    for (kind, tally) in kinds {
+    for (kind, tally) in w.named() {
         let rays = u64::from(tally.rays);
         let mut all = format!("  {kind:<10} {:>17}", grouped(rays));
         let mut each = format!("  {:<10} {:>17}", "", "per ray");

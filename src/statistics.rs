@@ -81,15 +81,8 @@ pub fn render(
 /// the rays and each counter's total and mean per ray.
 fn render_work(work: &RenderWork) -> Value {
     let w = work.by_kind();
-    let kinds = [
-        ("primary", w.primary),
-        ("shadow", w.shadow),
-        ("reflection", w.reflection),
-        ("refraction", w.refraction),
-        ("all", w.total()),
-    ];
     let mut by_kind = serde_json::Map::new();
-    for (kind, tally) in kinds {
+    for (kind, tally) in w.named() {
         let rays = u64::from(tally.rays);
         let mut counters = serde_json::Map::new();
         counters.insert("rays".into(), json!(rays));

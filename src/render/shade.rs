@@ -208,6 +208,18 @@ impl<C: Count> Work<C> {
         }
     }
 
+    /// The work of each kind, then of all, with their names: `primary`, `shadow`,
+    /// `reflection`, `refraction` and `all`.
+    pub fn named(&self) -> [(&'static str, C); 5] {
+        [
+            ("primary", self.primary),
+            ("shadow", self.shadow),
+            ("reflection", self.reflection),
+            ("refraction", self.refraction),
+            ("all", self.total()),
+        ]
+    }
+
     /// The work of every kind together.
     pub fn total(&self) -> C {
         let mut total = self.primary;

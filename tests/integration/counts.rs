@@ -185,7 +185,7 @@ fn a_packet_of_one_ray_counts_what_the_ray_does_alone() {
 
 /// `bench --stats --json -` on `scene` with `--accel ACCEL`: the work of its sets.
 fn bench_work(scene: &str, accel: &str) -> Vec<serde_json::Value> {
-    let scene = common::project_file(scene).display().to_string();
+    let scene = project_scene(scene);
     let args = [
         "bench",
         &scene,
@@ -209,7 +209,7 @@ fn bench_work(scene: &str, accel: &str) -> Vec<serde_json::Value> {
 #[test]
 fn bench_stats_count_every_set_along_every_path() {
     // balls_low: ten spheres and a floor of two triangles, no plane.
-    let brute = bench_work("scenes/balls_low.p3f", "none");
+    let brute = bench_work("balls_low", "none");
     assert_eq!(brute.len(), 3 * 3, "three sets, three paths");
     for work in &brute {
         let (set, api) = (
@@ -229,7 +229,7 @@ fn bench_stats_count_every_set_along_every_path() {
         assert!(work["lanes_at_nodes"].is_null() && work["lanes_at_leaves"].is_null());
     }
     for (accel, walks) in [("bvh", "nodes"), ("grid", "cells")] {
-        for work in bench_work("scenes/balls_low.p3f", accel) {
+        for work in bench_work("balls_low", accel) {
             let name = format!("{accel} {} {}", work["ray_set"], work["api"]);
             let counted = &work["per_ray"][walks];
             assert!(counted["total"].as_u64().unwrap() > 0, "{name}");
@@ -249,6 +249,13 @@ fn bench_stats_count_every_set_along_every_path() {
     }
 }
 
+/// The project's scene `scenes/NAME.p3f`, as an argument.
+fn project_scene(name: &str) -> String {
+    common::project_file(&format!("scenes/{name}.p3f"))
+        .display()
+        .to_string()
+}
+
 /// The sum of the counts of a cost EXR (`render --cost`): its one channel, Y.
 fn exr_sum(path: &std::path::Path) -> f64 {
     let bytes = std::fs::read(path).expect("the cost image");
@@ -263,10 +270,8 @@ fn json_file(path: &std::path::Path) -> serde_json::Value {
 #[test]
 fn a_cost_image_sums_to_the_frames_work_in_every_mode_and_effect() {
     let dir = common::scratch("counts_cost_sums");
-    let showcase = common::project_file("scenes/showcase.p3f")
-        .display()
-        .to_string();
-    let dof = common::project_file("scenes/dof.p3f").display().to_string();
+    let showcase = project_scene("showcase");
+    let dof = project_scene("dof");
     let effects: [(&str, &[&str]); 4] = [
         (&showcase, &[]),
         (
@@ -317,9 +322,7 @@ fn a_cost_image_sums_to_the_frames_work_in_every_mode_and_effect() {
 #[test]
 fn cost_images_do_not_depend_on_threads_or_tiles_and_merge_exactly() {
     let dir = common::scratch("counts_cost_farm");
-    let scene = common::project_file("scenes/showcase.p3f")
-        .display()
-        .to_string();
+    let scene = project_scene("showcase");
     let render = |name: &str, extra: &[&str]| {
         let out = dir.join(name);
         let mut args = vec![
@@ -415,9 +418,7 @@ fn cost_images_do_not_depend_on_threads_or_tiles_and_merge_exactly() {
 
 #[test]
 fn a_cost_image_is_refused_where_it_cannot_apply() {
-    let scene = common::project_file("scenes/balls_low.p3f")
-        .display()
-        .to_string();
+    let scene = project_scene("balls_low");
     let refused = |extra: &[&str], says: &str| {
         let mut args = vec!["render", &scene, "--resolution", "16x12", "-q"];
         args.extend_from_slice(extra);
@@ -449,9 +450,7 @@ fn a_cost_image_is_refused_where_it_cannot_apply() {
 #[test]
 fn compare_gives_the_ratio_of_two_cost_images() {
     let dir = common::scratch("counts_cost_compare");
-    let scene = common::project_file("scenes/balls_low.p3f")
-        .display()
-        .to_string();
+    let scene = project_scene("balls_low");
     let cost = |name: &str, accel: &str| {
         let out = dir.join(name).display().to_string();
         common::succeeds(&[

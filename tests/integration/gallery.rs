@@ -25,16 +25,27 @@ fn the_gallery_is_what_its_script_renders() {
         .expect("the gallery script runs");
     assert!(run.status.success(), "{}", stderr(&run));
     let committed = project_file("docs/gallery");
-    let names = file_names(&committed);
-    assert_eq!(
-        file_names(&out),
-        names,
-        "the script's files against docs/gallery/"
+    assert_the_same(
+        &out,
+        "docs/gallery",
+        &file_names(&committed),
+        "scripts/gallery.sh",
     );
-    for name in &names {
+}
+
+/// The files `names` of the project's folder `committed` are those of `out`, which holds
+/// nothing else, byte for byte: what `script` wrote.
+fn assert_the_same(out: &Path, committed: &str, names: &BTreeSet<String>, script: &str) {
+    assert_eq!(
+        &file_names(out),
+        names,
+        "{script}'s files against {committed}/"
+    );
+    for name in names {
+        let committed_file = project_file(committed).join(name);
         assert!(
-            std::fs::read(out.join(name)).unwrap() == std::fs::read(committed.join(name)).unwrap(),
-            "docs/gallery/{name} is not what scripts/gallery.sh renders: run the script"
+            std::fs::read(out.join(name)).unwrap() == std::fs::read(committed_file).unwrap(),
+            "{committed}/{name} is not what {script} renders: run the script"
         );
     }
 }
@@ -66,15 +77,5 @@ fn the_cost_images_are_what_their_script_renders() {
         names.iter().any(|n| n.starts_with("balls_high_")),
         "{names:?}"
     );
-    assert_eq!(
-        file_names(&out),
-        names,
-        "the script's files against docs/cost/"
-    );
-    for name in &names {
-        assert!(
-            std::fs::read(out.join(name)).unwrap() == std::fs::read(committed.join(name)).unwrap(),
-            "docs/cost/{name} is not what scripts/cost-gallery.sh renders: run the script"
-        );
-    }
+    assert_the_same(&out, "docs/cost", &names, "scripts/cost-gallery.sh");
 }
