@@ -42,6 +42,26 @@ fn main() {
         .to_string();
     println!("cargo:rustc-env=P3TRACE_TARGET_CPU={cpu}");
 
+    // Packets of 16 rays where the code may use AVX-512 (`wide` then runs 16 lanes as one
+    // instruction), of 8 elsewhere; the features `packet16` and `packet8` force a width
+    // (16 lanes run as two halves of 8 without AVX-512: the same values, for the tests).
+    println!("cargo::rustc-check-cfg=cfg(packet16)");
+    let forced = |width: &str| std::env::var_os(format!("CARGO_FEATURE_PACKET{width}")).is_some();
+    let avx512 = features.split(',').any(|f| f == "avx512f");
+    let sixteen = match (forced("16"), forced("8")) {
+        (true, true) => panic!("the features packet16 and packet8 exclude each other"),
+        (true, false) => true,
+        (false, true) => false,
+        (false, false) => avx512,
+    };
+    if sixteen {
+        println!("cargo:rustc-cfg=packet16");
+    }
+    println!(
+        "cargo:rustc-env=P3TRACE_PACKET={}",
+        if sixteen { 16 } else { 8 }
+    );
+
     // The CPU check, compiled for the x86-64 baseline whatever the Rust code targets.
     if std::env::var("CARGO_CFG_TARGET_ARCH").as_deref() == Ok("x86_64") {
         let features = features.replace(',', ", ");

@@ -7,10 +7,10 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
 use p3trace::intersect::{
-    self, BoxPack8, BoxRay, BoxRay8, SpherePack8, SphereRoots, TrianglePack8,
+    self, BoxPack8, BoxRay, BoxRays, SpherePack8, SphereRoots, TrianglePack8,
 };
 use p3trace::ray::{Ray, RayPacket};
-use p3trace::simd::F32x8;
+use p3trace::simd::{F32xP, LaneBits, PACKET};
 
 fn routines(c: &mut Criterion) {
     let hit = Ray::new(Vec3::new(0.1, 0.2, -5.0), Vec3::Z);
@@ -64,10 +64,10 @@ fn routines(c: &mut Criterion) {
     }
 }
 
-/// Eight rays fanning over the unit sphere at the origin: some hit, some miss.
-fn fan() -> [Ray; 8] {
+/// A packet's rays fanning over the unit sphere at the origin: some hit, some miss.
+fn fan() -> [Ray; PACKET] {
     std::array::from_fn(|i| {
-        let x = -1.4 + 0.4 * i as f32;
+        let x = -1.4 + 2.8 * i as f32 / (PACKET - 1) as f32;
         Ray::new(
             Vec3::new(x, 0.2, -5.0),
             Vec3::new(-0.02 * x, 0.0, 1.0).normalize(),
@@ -78,7 +78,8 @@ fn fan() -> [Ray; 8] {
 fn packets(c: &mut Criterion) {
     let rays = fan();
     let packet = RayPacket::new(&rays);
-    let (lo, hi) = (F32x8::ZERO, F32x8::splat(f32::INFINITY));
+    let (lo, hi) = (F32xP::ZERO, F32xP::splat(f32::INFINITY));
+    let all = LaneBits::MAX;
     let (p0, e1, e2) = (
         Vec3::new(-1., -1., 0.),
         Vec3::new(2., 0., 0.),
@@ -95,28 +96,28 @@ fn packets(c: &mut Criterion) {
                 SphereRoots::Precise,
                 lo,
                 hi,
-                0xFF,
+                all,
             )
         })
     });
-    c.bench_function("packet/sphere/scalar x8", |b| {
+    c.bench_function("packet/sphere/scalar", |b| {
         b.iter(|| {
             black_box(&rays).map(|r| intersect::sphere(&r, Vec3::ZERO, 1.0, 0.0, f32::INFINITY))
         })
     });
     c.bench_function("packet/triangle/simd", |b| {
-        b.iter(|| intersect::triangle_packet(black_box(&packet), p0, e1, e2, lo, hi, 0xFF))
+        b.iter(|| intersect::triangle_packet(black_box(&packet), p0, e1, e2, lo, hi, all))
     });
-    c.bench_function("packet/triangle/scalar x8", |b| {
+    c.bench_function("packet/triangle/scalar", |b| {
         b.iter(|| black_box(&rays).map(|r| intersect::triangle(&r, p0, e1, e2, 0.0, f32::INFINITY)))
     });
-    let box_rays = BoxRay8::new(&packet);
+    let box_rays = BoxRays::new(&packet);
     c.bench_function("packet/box interval/simd", |b| {
         b.iter(|| black_box(&box_rays).interval(bmin, bmax, lo, hi))
     });
     // The packet holds its inv_dir; the scalar rays get theirs computed outside the loop.
-    let scalar_rays: [BoxRay; 8] = rays.map(|r| BoxRay::new(r.origin, r.dir.recip()));
-    c.bench_function("packet/box interval/scalar x8", |b| {
+    let scalar_rays: [BoxRay; PACKET] = rays.map(|r| BoxRay::new(r.origin, r.dir.recip()));
+    c.bench_function("packet/box interval/scalar", |b| {
         b.iter(|| black_box(&scalar_rays).map(|r| r.interval(bmin, bmax, 0.0, f32::INFINITY)))
     });
 }

@@ -16,19 +16,26 @@ use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::render::light::{emitters, Receiver};
 use crate::render::sampler::{Sample, SampleGrid, SampleRng};
 use crate::scene::Scene;
+use crate::simd::PACKET;
 
 /// The protocol's image width; the height follows the scene's aspect ratio.
 pub const WIDTH: u32 = 1024;
 /// Secondary rays start this far off the surface, along the normal facing the ray.
 pub const OFFSET: f64 = 1e-4;
-/// Blocks of eight rays handed to a thread at a time.
-const CHUNK: usize = 128;
+/// Blocks (a packet's rays each) handed to a thread at a time: 1024 rays.
+const CHUNK: usize = 1024 / PACKET;
 /// An idle lane of a block.
 const IDLE: u32 = u32::MAX;
+/// The packet path's name, with the build's packet width.
+const PACKET_PATH: &str = if PACKET > 8 {
+    "p3trace-packet16"
+} else {
+    "p3trace-packet8"
+};
 /// Each path's name in the protocol's lines.
 const PATHS: [(&str, Path); 3] = [
     ("p3trace-single", Path::Single),
-    ("p3trace-packet8", Path::Packet),
+    (PACKET_PATH, Path::Packet),
     ("p3trace-stream", Path::Stream),
 ];
 
@@ -44,10 +51,11 @@ pub struct RaySet {
     /// For occlusion queries, the index of the light each ray heads for, which the
     /// renderer knows as it makes its shadow rays: [`Path::Stream`] groups by it.
     pub light: Vec<u32>,
-    /// The rays in groups of eight, as indices into `rays` (`IDLE` past the end): 4 x 2
-    /// pixel tiles for primary rays, as the Embree harness groups them, and eight
-    /// consecutive rays otherwise. Both paths walk the same blocks.
-    pub blocks: Vec<[u32; 8]>,
+    /// The rays in groups of a packet, as indices into `rays` (`IDLE` past the end):
+    /// pixel tiles 4 wide for primary rays (4 x 2 for 8 lanes, as the Embree harness
+    /// groups them, 4 x 4 for 16), and consecutive rays otherwise. All paths walk the
+    /// same blocks.
+    pub blocks: Vec<[u32; PACKET]>,
 }
 
 /// How a set's rays travel.
@@ -55,22 +63,22 @@ pub struct RaySet {
 pub enum Path {
     /// One ray at a time.
     Single,
-    /// A block of eight rays as one packet.
+    /// A block as one packet.
     Packet,
     /// The blocks that a thread takes at a time (`CHUNK` of them) as one stream of the
     /// scheduler the renderer traces its queues with ([`crate::accel::stream`]), which
-    /// regroups occlusion rays by their light before it traces them as packets of eight
+    /// regroups occlusion rays by their light before it traces them as packets
     /// (as Embree's stream API sorts an incoherent stream by direction), the regrouping
     /// timed with the tracing.
     Stream,
 }
 
-/// Eight consecutive rays per block.
-fn consecutive_blocks(n: usize) -> Vec<[u32; 8]> {
-    (0..n.div_ceil(8))
+/// A packet of consecutive rays per block.
+fn consecutive_blocks(n: usize) -> Vec<[u32; PACKET]> {
+    (0..n.div_ceil(PACKET))
         .map(|b| {
             std::array::from_fn(|k| {
-                let i = 8 * b + k;
+                let i = PACKET * b + k;
                 if i < n {
                     i as u32
                 } else {
@@ -81,14 +89,15 @@ fn consecutive_blocks(n: usize) -> Vec<[u32; 8]> {
         .collect()
 }
 
-/// 4 x 2 pixel tiles over a `width` x `height` image stored row by row: lanes 0-3 on
-/// row `2 ty`, lanes 4-7 on the row above.
-fn tile_blocks(width: u32, height: u32) -> Vec<[u32; 8]> {
-    let mut blocks = Vec::with_capacity((width as usize / 4 + 1) * (height as usize / 2 + 1));
-    for ty in 0..height.div_ceil(2) {
+/// Pixel tiles 4 wide and `PACKET / 4` high over a `width` x `height` image stored row
+/// by row: lanes 0-3 on row `rows * ty`, lanes 4-7 on the row above, and so on.
+fn tile_blocks(width: u32, height: u32) -> Vec<[u32; PACKET]> {
+    let rows = (PACKET / 4) as u32;
+    let mut blocks = Vec::with_capacity((width / 4 + 1) as usize * (height / rows + 1) as usize);
+    for ty in 0..height.div_ceil(rows) {
         for tx in 0..width.div_ceil(4) {
             blocks.push(std::array::from_fn(|k| {
-                let (x, y) = (4 * tx + k as u32 % 4, 2 * ty + k as u32 / 4);
+                let (x, y) = (4 * tx + k as u32 % 4, rows * ty + k as u32 / 4);
                 if x < width && y < height {
                     y * width + x
                 } else {
@@ -291,8 +300,8 @@ pub fn trace_set(
     reps: u32,
 ) -> Result<SetResult, String> {
     // Per lane: the hit's t, 0 for an occluded shadow ray, -1 for a miss.
-    let mut answers = vec![[f32::NAN; 8]; set.blocks.len()];
-    let mut counts = vec![[NoCount; 8]; set.blocks.len()];
+    let mut answers = vec![[f32::NAN; PACKET]; set.blocks.len()];
+    let mut counts = vec![[NoCount; PACKET]; set.blocks.len()];
     let mut result: Option<SetResult> = None;
     for pass in 1..=reps.max(1) {
         let start = Instant::now();
@@ -327,8 +336,8 @@ pub fn count_set(
     path: Path,
     pool: &rayon::ThreadPool,
 ) -> Vec<Tally> {
-    let mut answers = vec![[f32::NAN; 8]; set.blocks.len()];
-    let mut counts = vec![[Tally::default(); 8]; set.blocks.len()];
+    let mut answers = vec![[f32::NAN; PACKET]; set.blocks.len()];
+    let mut counts = vec![[Tally::default(); PACKET]; set.blocks.len()];
     trace_pass(tracer, set, path, pool, &mut answers, &mut counts);
     in_ray_order(set, &counts, Tally::default())
 }
@@ -340,10 +349,10 @@ fn trace_pass<C: Count>(
     set: &RaySet,
     path: Path,
     pool: &rayon::ThreadPool,
-    answers: &mut [[f32; 8]],
-    counts: &mut [[C; 8]],
+    answers: &mut [[f32; PACKET]],
+    counts: &mut [[C; PACKET]],
 ) {
-    answers.fill([f32::NAN; 8]);
+    answers.fill([f32::NAN; PACKET]);
     pool.install(|| {
         let chunks = answers
             .par_chunks_mut(CHUNK)
@@ -369,10 +378,10 @@ fn trace_pass<C: Count>(
 
 /// The answers and counts of `blocks`, each block by `trace`.
 fn each_block<C: Count>(
-    blocks: &[[u32; 8]],
-    answers: &mut [[f32; 8]],
-    counts: &mut [[C; 8]],
-    trace: impl Fn(&[u32; 8]) -> ([f32; 8], [C; 8]),
+    blocks: &[[u32; PACKET]],
+    answers: &mut [[f32; PACKET]],
+    counts: &mut [[C; PACKET]],
+    trace: impl Fn(&[u32; PACKET]) -> ([f32; PACKET], [C; PACKET]),
 ) {
     for ((answer, count), block) in answers.iter_mut().zip(counts).zip(blocks) {
         (*answer, *count) = trace(block);
@@ -380,8 +389,12 @@ fn each_block<C: Count>(
 }
 
 /// The answer and work of each lane of `block`, one ray at a time.
-fn trace_single<C: Count>(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> ([f32; 8], [C; 8]) {
-    let mut counts = [C::default(); 8];
+fn trace_single<C: Count>(
+    tracer: &Tracer,
+    set: &RaySet,
+    block: &[u32; PACKET],
+) -> ([f32; PACKET], [C; PACKET]) {
+    let mut counts = [C::default(); PACKET];
     let mut lanes = counts.iter_mut();
     let answers = block.map(|i| {
         let count = lanes.next().expect("a count per lane");
@@ -405,7 +418,11 @@ fn trace_single<C: Count>(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> ([
 }
 
 /// The answer and work of each lane of `block`, the block as one packet.
-fn trace_packet<C: Count>(tracer: &Tracer, set: &RaySet, block: &[u32; 8]) -> ([f32; 8], [C; 8]) {
+fn trace_packet<C: Count>(
+    tracer: &Tracer,
+    set: &RaySet,
+    block: &[u32; PACKET],
+) -> ([f32; PACKET], [C; PACKET]) {
     let active = lane_mask(|k| block[k] != IDLE);
     // Idle lanes carry a copy of the first ray and are masked off.
     let lane = |k: usize| if block[k] == IDLE { block[0] } else { block[k] } as usize;
@@ -449,9 +466,9 @@ impl Query for SetQuery<'_> {
 fn trace_stream<C: Count>(
     tracer: &Tracer,
     set: &RaySet,
-    blocks: &[[u32; 8]],
-    answers: &mut [[f32; 8]],
-    counts: &mut [[C; 8]],
+    blocks: &[[u32; PACKET]],
+    answers: &mut [[f32; PACKET]],
+    counts: &mut [[C; PACKET]],
     arena: &Bump,
 ) {
     let (answers, counts) = (answers.as_flattened_mut(), counts.as_flattened_mut());
@@ -463,7 +480,7 @@ fn trace_stream<C: Count>(
         (i, SetQuery { ray, t_max, place })
     });
     if set.occlusion {
-        let mut stream = Occlusions::with_capacity_in(8 * blocks.len(), arena);
+        let mut stream = Occlusions::with_capacity_in(PACKET * blocks.len(), arena);
         for (i, query) in rays {
             stream.push(set.light[i], query);
         }
@@ -492,7 +509,7 @@ fn trace_stream<C: Count>(
 }
 
 /// Each lane's value of `blocks` rearranged into the order of the set's rays.
-fn in_ray_order<T: Copy>(set: &RaySet, lanes: &[[T; 8]], unset: T) -> Vec<T> {
+fn in_ray_order<T: Copy>(set: &RaySet, lanes: &[[T; PACKET]], unset: T) -> Vec<T> {
     let mut ordered = vec![unset; set.rays.len()];
     for (block, values) in set.blocks.iter().zip(lanes) {
         for (&i, &value) in block.iter().zip(values) {
@@ -540,7 +557,7 @@ impl Spread {
 }
 
 /// The traversal work of a set's rays along one path: each counter's spread per ray and,
-/// for packets, how many of a packet's eight lanes are active at a node visited and at a
+/// for packets, how many of a packet's lanes are active at a node visited and at a
 /// leaf tested, on average (visits finished one ray at a time count as one lane).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Work {
@@ -560,10 +577,9 @@ impl Work {
             .map(|c| (c, Spread::of(tallies.iter().map(|t| t.get(c)).collect())))
             .collect();
         // Visits are the lanes' shares summed (`accel::count`).
-        let lanes = |events: fn(&Tally) -> u32, share: fn(&Tally) -> u32| {
+        let lanes = |events: fn(&Tally) -> u32, share: fn(&Tally) -> u64| {
             let events: u64 = tallies.iter().map(|t| u64::from(events(t))).sum();
-            let visits =
-                tallies.iter().map(|t| u64::from(share(t))).sum::<u64>() as f64 / f64::from(SHARE);
+            let visits = tallies.iter().map(share).sum::<u64>() as f64 / SHARE as f64;
             (path != Path::Single && visits > 0.0).then(|| events as f64 / visits)
         };
         Work {
@@ -597,7 +613,7 @@ impl Work {
             .collect();
         if let (Some(nodes), Some(leaves)) = (self.lanes_at_nodes, self.lanes_at_leaves) {
             lines.push(format!(
-                "{head}  lanes   {nodes:.2} of 8 at a node, {leaves:.2} of 8 at a leaf"
+                "{head}  lanes   {nodes:.2} of {PACKET} at a node, {leaves:.2} of {PACKET} at a leaf"
             ));
         }
         lines
@@ -728,7 +744,7 @@ mod tests {
             apis,
             [
                 "p3trace-single",
-                "p3trace-packet8",
+                PACKET_PATH,
                 "p3trace-stream",
                 "p3trace-best"
             ]
@@ -746,7 +762,7 @@ mod tests {
 
     #[test]
     fn blocks_cover_every_ray_once() {
-        let covers = |blocks: Vec<[u32; 8]>, n: usize| {
+        let covers = |blocks: Vec<[u32; PACKET]>, n: usize| {
             let mut seen = vec![0; n];
             for &i in blocks.iter().flatten().filter(|&&i| i != IDLE) {
                 seen[i as usize] += 1;
@@ -757,7 +773,10 @@ mod tests {
             assert!(covers(tile_blocks(w, h), (w * h) as usize), "{w}x{h}");
         }
         assert!(covers(consecutive_blocks(13), 13));
-        assert_eq!(tile_blocks(8, 2)[1], [4, 5, 6, 7, 12, 13, 14, 15]);
+        // The second tile of two rows: four pixels of each, the lanes of rows below idle.
+        let tile = tile_blocks(8, 2)[1];
+        assert_eq!(tile[..8], [4, 5, 6, 7, 12, 13, 14, 15]);
+        assert!(tile[8..].iter().all(|&i| i == IDLE));
     }
 
     /// Ten lights, whose shadow rays a stream regroups light by light, and spheres that
@@ -777,8 +796,8 @@ mod tests {
                 (tracer, set, pool): (&Tracer, &RaySet, &rayon::ThreadPool),
                 path: Path,
             ) -> Vec<f32> {
-                let mut answers = vec![[f32::NAN; 8]; set.blocks.len()];
-                let mut counts = vec![[C::default(); 8]; set.blocks.len()];
+                let mut answers = vec![[f32::NAN; PACKET]; set.blocks.len()];
+                let mut counts = vec![[C::default(); PACKET]; set.blocks.len()];
                 trace_pass(tracer, set, path, pool, &mut answers, &mut counts);
                 in_ray_order(set, &answers, f32::NAN)
             }

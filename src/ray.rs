@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use crate::prim::PrimId;
-use crate::simd::{F32x8, Vec3x8};
+use crate::simd::{Bits, F32xP, LaneBits, Vec3xP, PACKET};
 
 /// A ray `origin + t * dir`. `dir` is unit length wherever the renderer makes rays: the
 /// intersection routines rely on it (the sphere test skips the `dot(d, d)` term).
@@ -35,7 +35,7 @@ impl Ray {
     }
 }
 
-/// Eight rays traced together (Embree's `RayK`), the one packet type of every layer: the
+/// [`PACKET`] rays traced together (Embree's `RayK`: 8, or 16 in an AVX-512 build), the one packet type of every layer: the
 /// rays themselves (borrowed, for lanes that go on alone), the same rays as structure of arrays
 /// for the packet kernels of [`crate::intersect`] (lane `i` is ray `i`), each lane's
 /// interval `(t_min, t_max[i])`, and the lanes that are asked (`active`, bit `i` for
@@ -43,58 +43,60 @@ impl Ray {
 /// `ray.dir.recip()`, so the slab tests see the same bits.
 #[derive(Clone, Copy, Debug)]
 pub struct RayPacket<'r> {
-    pub rays: &'r [Ray; 8],
-    pub origin: Vec3x8,
-    pub dir: Vec3x8,
-    pub inv_dir: Vec3x8,
-    pub time: F32x8,
+    pub rays: &'r [Ray; PACKET],
+    pub origin: Vec3xP,
+    pub dir: Vec3xP,
+    pub inv_dir: Vec3xP,
+    pub time: F32xP,
     /// One lower end for every lane: queries start at the origin.
     pub t_min: f32,
-    pub t_max: [f32; 8],
-    pub active: u8,
+    pub t_max: [f32; PACKET],
+    pub active: LaneBits,
 }
 
-/// The bit mask of the lanes `0..8` for which `pred` holds.
-pub fn lane_mask(mut pred: impl FnMut(usize) -> bool) -> u8 {
-    (0..8).filter(|&k| pred(k)).fold(0, |mask, k| mask | 1 << k)
+/// The bit mask of a packet's lanes `0..PACKET` for which `pred` holds.
+pub fn lane_mask(mut pred: impl FnMut(usize) -> bool) -> LaneBits {
+    (0..PACKET)
+        .filter(|&k| pred(k))
+        .fold(LaneBits::EMPTY, |mask, k| mask.with(k))
 }
 
 impl<'r> RayPacket<'r> {
-    /// The eight rays, every lane active over `(0, inf)`.
-    pub fn new(rays: &'r [Ray; 8]) -> Self {
-        let dir = Vec3x8::from_lanes(rays.map(|r| r.dir));
+    /// The rays, every lane active over `(0, inf)`.
+    pub fn new(rays: &'r [Ray; PACKET]) -> Self {
+        let dir = Vec3xP::from_lanes(rays.map(|r| r.dir));
         RayPacket {
             rays,
-            origin: Vec3x8::from_lanes(rays.map(|r| r.origin)),
+            origin: Vec3xP::from_lanes(rays.map(|r| r.origin)),
             dir,
             inv_dir: dir.recip(),
-            time: F32x8::from_array(rays.map(|r| r.time)),
+            time: F32xP::from_array(rays.map(|r| r.time)),
             t_min: 0.0,
-            t_max: [f32::INFINITY; 8],
-            active: 0xFF,
+            t_max: [f32::INFINITY; PACKET],
+            active: LaneBits::first(PACKET),
         }
     }
 
     /// The packet with only the lanes `active` asked.
-    pub fn with_active(self, active: u8) -> Self {
+    pub fn with_active(self, active: LaneBits) -> Self {
         RayPacket { active, ..self }
     }
 
     /// The packet with lane `i` asked within `(t_min, t_max[i])`.
-    pub fn with_t_max(self, t_max: [f32; 8]) -> Self {
+    pub fn with_t_max(self, t_max: [f32; PACKET]) -> Self {
         RayPacket { t_max, ..self }
     }
 
-    /// The lanes whose ray [`Ray::is_traceable`] (its 8-lane twin), as a bit mask.
-    pub fn traceable(&self) -> u8 {
-        let finite = |v: Vec3x8| v.x.is_finite() & v.y.is_finite() & v.z.is_finite();
-        let zero = F32x8::splat(0.0);
+    /// The lanes whose ray [`Ray::is_traceable`] (its lane-wise twin), as a bit mask.
+    pub fn traceable(&self) -> LaneBits {
+        let finite = |v: Vec3xP| v.x.is_finite() & v.y.is_finite() & v.z.is_finite();
+        let zero = F32xP::splat(0.0);
         let dir_zero = self.dir.x.eq(zero) & self.dir.y.eq(zero) & self.dir.z.eq(zero);
         (finite(self.origin) & finite(self.dir) & !dir_zero).bitmask()
     }
 
     /// Each lane's `1 / dir`, as the single-ray routines take it.
-    pub fn inv_dir_lanes(&self) -> [Vec3; 8] {
+    pub fn inv_dir_lanes(&self) -> [Vec3; PACKET] {
         std::array::from_fn(|k| self.inv_dir.lane(k))
     }
 }

@@ -1,7 +1,17 @@
-//! Eight-lane SIMD types for the intersection kernels and the shading of eight hits at a
-//! time. This is the only module that imports `wide`: kernels see [`F32x8`], [`Mask8`]
-//! and [`Vec3x8`] and nothing else, so the backing crate (or a hand-written fallback)
-//! can change here alone.
+//! The SIMD lane types of the intersection kernels, the packets and the shading of eight
+//! hits at a time: [`F32x8`], [`Mask8`] and [`Vec3x8`] (eight lanes) and [`F32x16`],
+//! [`Mask16`] and [`Vec3x16`] (sixteen), generated from one definition. This is the only
+//! module that imports `wide`, so the backing crate (or a hand-written fallback) can
+//! change here alone. Kernels written once for any width take [`Floats`] (with its
+//! [`LaneMask`] and [`Vec3Lanes`]); `wide` runs sixteen lanes as AVX-512 instructions where
+//! the build enables `avx512f`, and as two halves of eight otherwise, lane for lane the
+//! same values.
+//!
+//! **Packet width.** A packet holds [`PACKET`] rays, in the types [`F32xP`], [`MaskP`],
+//! [`Vec3xP`] and [`LaneBits`] picked here: 16 lanes where the build targets AVX-512
+//! (`avx512f`, as `-C target-cpu=x86-64-v4` enables), 8 elsewhere; the feature `packet16`
+//! or `packet8` forces one (`build.rs` says which as the `cfg` `packet16`). A node's eight
+//! children and a leaf's pack of eight stay eight lanes at every width.
 //!
 //! Every operation is IEEE-exact lane by lane (`+ - * /` and `sqrt` are correctly
 //! rounded, as their scalar counterparts are) and nothing here fuses a multiply with an
@@ -11,307 +21,145 @@
 //! version is pinned (`=0.34.2`, in `fuzz/` too): a release that reorders one would part
 //! the twins.
 
+use std::fmt::Debug;
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
 use glam::Vec3;
-use wide::{f32x8, u32x8};
+use wide::{f32x16, f32x8, u32x16, u32x8};
 
-/// Eight `f32` lanes.
-#[derive(Clone, Copy, Debug)]
-pub struct F32x8(f32x8);
+#[cfg(not(packet16))]
+mod packet {
+    pub use super::{F32x8 as F32xP, Mask8 as MaskP, Vec3x8 as Vec3xP};
+    /// A packet's lanes as bits, bit `k` for lane `k`.
+    pub type LaneBits = u8;
+}
+#[cfg(packet16)]
+mod packet {
+    pub use super::{F32x16 as F32xP, Mask16 as MaskP, Vec3x16 as Vec3xP};
+    /// A packet's lanes as bits, bit `k` for lane `k`.
+    pub type LaneBits = u16;
+}
+pub use packet::{F32xP, LaneBits, MaskP, Vec3xP};
 
-/// Eight lane flags (each lane all ones or all zeros), from comparisons.
-#[derive(Clone, Copy, Debug)]
-pub struct Mask8(f32x8);
+/// Rays in a packet: the lanes of [`F32xP`].
+pub const PACKET: usize = <F32xP as Floats>::LANES;
 
-/// Eight 3-vectors as structure of arrays: lane `i` is `(x[i], y[i], z[i])`.
-#[derive(Clone, Copy, Debug)]
-pub struct Vec3x8 {
-    pub x: F32x8,
-    pub y: F32x8,
-    pub z: F32x8,
+/// What a kernel written once for any width asks of its lanes: [`F32x8`] and [`F32x16`]
+/// answer it with their own methods, the same operations in the same order.
+pub trait Floats:
+    Copy
+    + Debug
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    const LANES: usize;
+    type Mask: LaneMask<Floats = Self>;
+    fn splat(value: f32) -> Self;
+    /// Lane `i` is `lane(i)`.
+    fn from_fn(lane: impl FnMut(usize) -> f32) -> Self;
+    fn lane(&self, i: usize) -> f32;
+    fn set_lane(&mut self, i: usize, value: f32);
+    fn min(self, rhs: Self) -> Self;
+    fn max(self, rhs: Self) -> Self;
+    fn max_num(self, rhs: Self) -> Self;
+    fn sqrt(self) -> Self;
+    fn abs(self) -> Self;
+    fn copysign(self, sign: Self) -> Self;
+    fn min_lane(self) -> f32;
+    fn max_lane(self) -> f32;
+    fn lt(self, rhs: Self) -> Self::Mask;
+    fn le(self, rhs: Self) -> Self::Mask;
+    fn gt(self, rhs: Self) -> Self::Mask;
+    fn ge(self, rhs: Self) -> Self::Mask;
+    fn eq(self, rhs: Self) -> Self::Mask;
+    fn is_nan(self) -> Self::Mask;
+    fn is_finite(self) -> Self::Mask;
+    fn powf(self, exponent: Self, lanes: Self::Mask) -> Self;
+    fn next_up(self) -> Self;
+    fn next_down(self) -> Self;
 }
 
-impl F32x8 {
-    pub const ZERO: F32x8 = F32x8::splat(0.0);
-
-    #[inline]
-    pub const fn splat(value: f32) -> Self {
-        F32x8(f32x8::splat(value))
-    }
-
-    #[inline]
-    pub const fn from_array(lanes: [f32; 8]) -> Self {
-        F32x8(f32x8::new(lanes))
-    }
-
-    #[inline]
-    pub const fn to_array(self) -> [f32; 8] {
-        self.0.to_array()
-    }
-
-    /// Lane `i`, read in place.
-    #[inline]
-    pub fn lane(&self, i: usize) -> f32 {
-        self.0.as_array()[i]
-    }
-
-    /// Sets lane `i` in place (lanes written one by one cost no transposition after).
-    #[inline]
-    pub fn set_lane(&mut self, i: usize, value: f32) {
-        self.0.as_mut_array()[i] = value;
-    }
-
-    /// Lane-wise `if self < rhs { self } else { rhs }`: the x86 `minps` rule, and glam's
-    /// `Vec3::min`. NaN in either operand, or a tie such as `-0.0` against `0.0`, gives
-    /// `rhs`.
-    #[inline]
-    pub fn min(self, rhs: Self) -> Self {
-        // `minps` is exactly this rule (the unit tests pin it).
-        F32x8(self.0.fast_min(rhs.0))
-    }
-
-    /// Lane-wise `if self > rhs { self } else { rhs }` (`maxps`, glam's `Vec3::max`).
-    /// NaN in either operand, or a tie, gives `rhs`.
-    #[inline]
-    pub fn max(self, rhs: Self) -> Self {
-        F32x8(self.0.fast_max(rhs.0))
-    }
-
-    /// The larger operand, ignoring a NaN one as `f32::max` does; a tie (`-0.0` against
-    /// `0.0`) gives `rhs`, a rule `f32::max` leaves open. Scalar twin: `intersect::max_num`.
-    #[inline]
-    pub fn max_num(self, rhs: Self) -> Self {
-        (self.gt(rhs) | rhs.is_nan()).select(self, rhs)
-    }
-
-    /// Correctly rounded square root (NaN for negative lanes), as `f32::sqrt`.
-    #[inline]
-    pub fn sqrt(self) -> Self {
-        F32x8(self.0.sqrt())
-    }
-
-    /// Clears the sign bit, as `f32::abs`.
-    #[inline]
-    pub fn abs(self) -> Self {
-        F32x8(self.0.abs())
-    }
-
-    /// The magnitude of `self` with the sign bit of `sign`, as `f32::copysign` (NaN
-    /// operands included: only bits move).
-    #[inline]
-    pub fn copysign(self, sign: Self) -> Self {
-        F32x8(self.0.copysign(sign.0))
-    }
-
-    /// The smallest lane, by [`F32x8::min`] between halves, then quarters, then pairs:
-    /// where no lane is NaN, the least value (either zero where `-0.0` and `0.0` tie), as
-    /// a fold of `f32::min` over the lanes gives.
-    #[inline]
-    pub fn min_lane(self) -> f32 {
-        self.reduce(F32x8::min)
-    }
-
-    /// The largest lane, as [`F32x8::min_lane`] with [`F32x8::max`].
-    #[inline]
-    pub fn max_lane(self) -> f32 {
-        self.reduce(F32x8::max)
-    }
-
-    /// `combine` of the lanes pairwise, by halves, quarters and pairs (shuffles).
-    #[inline(always)]
-    fn reduce(self, combine: impl Fn(F32x8, F32x8) -> F32x8) -> f32 {
-        let a = self.to_array();
-        let halves = combine(
-            self,
-            F32x8::from_array([a[4], a[5], a[6], a[7], a[0], a[1], a[2], a[3]]),
-        );
-        let b = halves.to_array();
-        let quarters = combine(
-            halves,
-            F32x8::from_array([b[2], b[3], b[0], b[1], b[6], b[7], b[4], b[5]]),
-        );
-        let c = quarters.to_array();
-        combine(
-            quarters,
-            F32x8::from_array([c[1], c[0], c[3], c[2], c[5], c[4], c[7], c[6]]),
-        )
-        .to_array()[0]
-    }
-
-    /// Ordered comparisons: a NaN lane compares false, as in scalar Rust.
-    #[inline]
-    pub fn lt(self, rhs: Self) -> Mask8 {
-        Mask8(self.0.simd_lt(rhs.0))
-    }
-
-    #[inline]
-    pub fn le(self, rhs: Self) -> Mask8 {
-        Mask8(self.0.simd_le(rhs.0))
-    }
-
-    #[inline]
-    pub fn gt(self, rhs: Self) -> Mask8 {
-        Mask8(self.0.simd_gt(rhs.0))
-    }
-
-    #[inline]
-    pub fn ge(self, rhs: Self) -> Mask8 {
-        Mask8(self.0.simd_ge(rhs.0))
-    }
-
-    /// Equality (`-0.0 == 0.0`; NaN equals nothing).
-    #[inline]
-    pub fn eq(self, rhs: Self) -> Mask8 {
-        Mask8(self.0.simd_eq(rhs.0))
-    }
-
-    #[inline]
-    pub fn is_nan(self) -> Mask8 {
-        Mask8(self.0.is_nan())
-    }
-
-    /// `self` raised to `exponent` lane by lane with `f32::powf` (the C library's
-    /// `powf`, whose exact bits no vector form here reproduces) in the lanes of `lanes`,
-    /// zero in the others.
-    #[inline]
-    pub fn powf(self, exponent: Self, lanes: Mask8) -> Self {
-        let (base, exponent) = (self.to_array(), exponent.to_array());
-        let mut power = [0.0; 8];
-        for_lanes(lanes.bitmask(), |k| power[k] = base[k].powf(exponent[k]));
-        F32x8::from_array(power)
-    }
-
-    /// The next float above each lane, as `f32::next_up` (NaN and infinity stay): one
-    /// step of the lane's bits, away from zero for positive lanes, towards it for negative.
-    #[inline]
-    pub fn next_up(self) -> Self {
-        let bits = self.0.to_bits();
-        let magnitude = bits & u32x8::splat(0x7fff_ffff);
-        let one = u32x8::splat(1);
-        let positive = bits.simd_eq(magnitude);
-        let step = positive.select(bits + one, bits - one);
-        let next = magnitude.simd_eq(u32x8::ZERO).select(one, step);
-        let keep = self.is_nan() | self.eq(F32x8::splat(f32::INFINITY));
-        keep.select(self, F32x8(f32x8::from_bits(next)))
-    }
-
-    /// The next float below each lane, as `f32::next_down`: `-(-x).next_up()`, bit for bit.
-    #[inline]
-    pub fn next_down(self) -> Self {
-        -(-self).next_up()
-    }
-
-    /// Neither NaN nor infinite, as `f32::is_finite`.
-    #[inline]
-    pub fn is_finite(self) -> Mask8 {
-        self.abs().lt(F32x8::splat(f32::INFINITY))
-    }
+/// The flags of a [`Floats`]' lanes, from its comparisons.
+pub trait LaneMask:
+    Copy + Debug + BitAnd<Output = Self> + BitOr<Output = Self> + Not<Output = Self>
+{
+    type Floats: Floats<Mask = Self>;
+    type Bits: Bits;
+    const ALL: Self;
+    const NONE: Self;
+    fn from_bitmask(bits: Self::Bits) -> Self;
+    fn bitmask(self) -> Self::Bits;
+    fn any(self) -> bool;
+    fn all(self) -> bool;
+    fn none(self) -> bool;
+    fn and_not(self, rhs: Self) -> Self;
+    fn select(self, if_true: Self::Floats, if_false: Self::Floats) -> Self::Floats;
 }
 
-impl Add for F32x8 {
-    type Output = F32x8;
-    #[inline]
-    fn add(self, rhs: Self) -> Self {
-        F32x8(self.0 + rhs.0)
-    }
+/// Lanes as the bits of an integer, bit `k` for lane `k`: `u8` for eight, `u16` for
+/// sixteen.
+pub trait Bits:
+    Copy + Eq + Debug + BitAnd<Output = Self> + BitOr<Output = Self> + Not<Output = Self>
+{
+    const EMPTY: Self;
+    /// The lowest `n` lanes.
+    fn first(n: usize) -> Self;
+    fn has(self, lane: usize) -> bool;
+    fn with(self, lane: usize) -> Self;
+    fn count(self) -> u32;
+    fn lowest(self) -> usize;
+    fn highest(self) -> usize;
+    /// Without its lowest set bit.
+    fn drop_lowest(self) -> Self;
 }
 
-impl Sub for F32x8 {
-    type Output = F32x8;
-    #[inline]
-    fn sub(self, rhs: Self) -> Self {
-        F32x8(self.0 - rhs.0)
-    }
-}
-
-impl Mul for F32x8 {
-    type Output = F32x8;
-    #[inline]
-    fn mul(self, rhs: Self) -> Self {
-        F32x8(self.0 * rhs.0)
-    }
-}
-
-impl Div for F32x8 {
-    type Output = F32x8;
-    #[inline]
-    fn div(self, rhs: Self) -> Self {
-        F32x8(self.0 / rhs.0)
-    }
-}
-
-impl Neg for F32x8 {
-    type Output = F32x8;
-    /// Flips the sign bit, as scalar negation does (also for NaN and zero).
-    #[inline]
-    fn neg(self) -> Self {
-        F32x8(-self.0)
-    }
-}
-
-impl Mask8 {
-    pub const ALL: Mask8 = Mask8(f32x8::splat(f32::from_bits(u32::MAX)));
-    pub const NONE: Mask8 = Mask8(f32x8::splat(0.0));
-
-    /// The mask whose lane `i` is set when bit `i` of `bits` is: one load from a table
-    /// (building the lanes one by one showed up in profiles of the traversal).
-    #[inline]
-    pub fn from_bitmask(bits: u8) -> Self {
-        Mask8(f32x8::new(MASKS[bits as usize]))
-    }
-
-    /// Bit `i` set when lane `i` is.
-    #[inline]
-    pub fn bitmask(self) -> u8 {
-        self.0.to_bitmask() as u8
-    }
-
-    #[inline]
-    pub fn any(self) -> bool {
-        self.0.any()
-    }
-
-    #[inline]
-    pub fn all(self) -> bool {
-        self.0.all()
-    }
-
-    #[inline]
-    pub fn none(self) -> bool {
-        !self.0.any()
-    }
-
-    /// `self & !rhs`: the lanes of `self` that `rhs` does not have.
-    #[inline]
-    pub fn and_not(self, rhs: Mask8) -> Mask8 {
-        self & !rhs
-    }
-
-    /// Lane-wise `if self { if_true } else { if_false }`.
-    #[inline]
-    pub fn select(self, if_true: F32x8, if_false: F32x8) -> F32x8 {
-        F32x8(self.0.select(if_true.0, if_false.0))
-    }
-
-    /// [`Mask8::select`] on each component.
-    #[inline]
-    pub fn select_vec(self, if_true: Vec3x8, if_false: Vec3x8) -> Vec3x8 {
-        Vec3x8 {
-            x: self.select(if_true.x, if_false.x),
-            y: self.select(if_true.y, if_false.y),
-            z: self.select(if_true.z, if_false.z),
+macro_rules! bits {
+    ($($t:ty),*) => {$(
+        impl Bits for $t {
+            const EMPTY: $t = 0;
+            #[inline(always)]
+            fn first(n: usize) -> Self {
+                ((1u32 << n) - 1) as $t
+            }
+            #[inline(always)]
+            fn has(self, lane: usize) -> bool {
+                self & (1 << lane) != 0
+            }
+            #[inline(always)]
+            fn with(self, lane: usize) -> Self {
+                self | (1 << lane)
+            }
+            #[inline(always)]
+            fn count(self) -> u32 {
+                self.count_ones()
+            }
+            #[inline(always)]
+            fn lowest(self) -> usize {
+                self.trailing_zeros() as usize
+            }
+            #[inline(always)]
+            fn highest(self) -> usize {
+                self.ilog2() as usize
+            }
+            #[inline(always)]
+            fn drop_lowest(self) -> Self {
+                self & self.wrapping_sub(1)
+            }
         }
-    }
+    )*};
 }
+bits!(u8, u16);
 
-/// Calls `f` with the index of each set bit of `mask` (a [`Mask8::bitmask`]), lowest
+/// Calls `f` with the index of each set bit of `mask` (a [`LaneMask::bitmask`]), lowest
 /// first.
 #[inline]
-pub fn for_lanes(mut mask: u8, mut f: impl FnMut(usize)) {
-    while mask != 0 {
-        f(mask.trailing_zeros() as usize);
-        mask &= mask - 1;
+pub fn for_lanes<B: Bits>(mut mask: B, mut f: impl FnMut(usize)) {
+    while mask != B::EMPTY {
+        f(mask.lowest());
+        mask = mask.drop_lowest();
     }
 }
 
@@ -332,7 +180,7 @@ pub fn prefetch<T>(value: &T) {
     let _ = value;
 }
 
-/// Every mask, by its bit mask.
+/// Every mask of eight lanes, by its bit mask.
 static MASKS: [[f32; 8]; 256] = {
     let mut table = [[0.0; 8]; 256];
     let mut bits = 0;
@@ -349,60 +197,39 @@ static MASKS: [[f32; 8]; 256] = {
     table
 };
 
-impl BitAnd for Mask8 {
-    type Output = Mask8;
-    #[inline]
-    fn bitand(self, rhs: Self) -> Self {
-        Mask8(self.0 & rhs.0)
-    }
+/// Three-vectors as structure of arrays, lane `i` `(x[i], y[i], z[i])`, each operation as
+/// glam's on each lane's `Vec3`.
+#[derive(Clone, Copy, Debug)]
+pub struct Vec3Lanes<F> {
+    pub x: F,
+    pub y: F,
+    pub z: F,
 }
 
-impl BitOr for Mask8 {
-    type Output = Mask8;
-    #[inline]
-    fn bitor(self, rhs: Self) -> Self {
-        Mask8(self.0 | rhs.0)
-    }
-}
-
-impl Not for Mask8 {
-    type Output = Mask8;
-    #[inline]
-    fn not(self) -> Self {
-        Mask8(!self.0)
-    }
-}
-
-impl Vec3x8 {
-    pub const ZERO: Vec3x8 = Vec3x8 {
-        x: F32x8::ZERO,
-        y: F32x8::ZERO,
-        z: F32x8::ZERO,
-    };
-
+impl<F: Floats> Vec3Lanes<F> {
     /// `v` in each component, lane by lane (glam's `Vec3::splat` of each lane's `v`).
     #[inline]
-    pub fn from_components(v: F32x8) -> Self {
-        Vec3x8 { x: v, y: v, z: v }
+    pub fn from_components(v: F) -> Self {
+        Vec3Lanes { x: v, y: v, z: v }
     }
 
     /// The same vector in every lane.
     #[inline]
     pub fn splat(v: Vec3) -> Self {
-        Vec3x8 {
-            x: F32x8::splat(v.x),
-            y: F32x8::splat(v.y),
-            z: F32x8::splat(v.z),
+        Vec3Lanes {
+            x: F::splat(v.x),
+            y: F::splat(v.y),
+            z: F::splat(v.z),
         }
     }
 
-    /// Lane `i` from `lanes[i]`.
+    /// Lane `i` is `lane(i)`.
     #[inline]
-    pub fn from_lanes(lanes: [Vec3; 8]) -> Self {
-        Vec3x8 {
-            x: F32x8::from_array(lanes.map(|v| v.x)),
-            y: F32x8::from_array(lanes.map(|v| v.y)),
-            z: F32x8::from_array(lanes.map(|v| v.z)),
+    pub fn from_fn(lane: impl Fn(usize) -> Vec3) -> Self {
+        Vec3Lanes {
+            x: F::from_fn(|i| lane(i).x),
+            y: F::from_fn(|i| lane(i).y),
+            z: F::from_fn(|i| lane(i).z),
         }
     }
 
@@ -423,14 +250,14 @@ impl Vec3x8 {
 
     /// `x x' + y y' + z z'`, summed left to right as glam's `Vec3::dot`.
     #[inline]
-    pub fn dot(self, rhs: Self) -> F32x8 {
+    pub fn dot(self, rhs: Self) -> F {
         self.x * rhs.x + self.y * rhs.y + self.z * rhs.z
     }
 
     /// The cross product, each component computed as glam's `Vec3::cross` does.
     #[inline]
     pub fn cross(self, rhs: Self) -> Self {
-        Vec3x8 {
+        Vec3Lanes {
             x: self.y * rhs.z - rhs.y * self.z,
             y: self.z * rhs.x - rhs.z * self.x,
             z: self.x * rhs.y - rhs.x * self.y,
@@ -439,28 +266,28 @@ impl Vec3x8 {
 
     /// Each component times the lane's scalar `s` (glam's `f32 * Vec3`).
     #[inline]
-    pub fn scale(self, s: F32x8) -> Self {
-        Vec3x8 {
+    pub fn scale(self, s: F) -> Self {
+        Vec3Lanes {
             x: s * self.x,
             y: s * self.y,
             z: s * self.z,
         }
     }
 
-    /// [`F32x8::min`] per component, as glam's `Vec3::min`.
+    /// [`Floats::min`] per component, as glam's `Vec3::min`.
     #[inline]
     pub fn min(self, rhs: Self) -> Self {
-        Vec3x8 {
+        Vec3Lanes {
             x: self.x.min(rhs.x),
             y: self.y.min(rhs.y),
             z: self.z.min(rhs.z),
         }
     }
 
-    /// [`F32x8::max`] per component, as glam's `Vec3::max`.
+    /// [`Floats::max`] per component, as glam's `Vec3::max`.
     #[inline]
     pub fn max(self, rhs: Self) -> Self {
-        Vec3x8 {
+        Vec3Lanes {
             x: self.x.max(rhs.x),
             y: self.y.max(rhs.y),
             z: self.z.max(rhs.z),
@@ -470,7 +297,7 @@ impl Vec3x8 {
     /// Each component's magnitude, as glam's `Vec3::abs`.
     #[inline]
     pub fn abs(self) -> Self {
-        Vec3x8 {
+        Vec3Lanes {
             x: self.x.abs(),
             y: self.y.abs(),
             z: self.z.abs(),
@@ -479,34 +306,44 @@ impl Vec3x8 {
 
     /// `sqrt(v . v)`, as glam's `Vec3::length`.
     #[inline]
-    pub fn length(self) -> F32x8 {
+    pub fn length(self) -> F {
         self.dot(self).sqrt()
     }
 
     /// `v * (1 / |v|)`, as glam's `Vec3::normalize`.
     #[inline]
     pub fn normalize(self) -> Self {
-        self.scale(F32x8::splat(1.0) / self.length())
+        self.scale(F::splat(1.0) / self.length())
     }
 
     /// `1 / v` per component, as glam's `Vec3::recip`.
     #[inline]
     pub fn recip(self) -> Self {
-        let one = F32x8::splat(1.0);
-        Vec3x8 {
+        let one = F::splat(1.0);
+        Vec3Lanes {
             x: one / self.x,
             y: one / self.y,
             z: one / self.z,
         }
     }
+
+    /// [`LaneMask::select`] on each component.
+    #[inline]
+    pub fn select(mask: F::Mask, if_true: Self, if_false: Self) -> Self {
+        Vec3Lanes {
+            x: mask.select(if_true.x, if_false.x),
+            y: mask.select(if_true.y, if_false.y),
+            z: mask.select(if_true.z, if_false.z),
+        }
+    }
 }
 
-impl Neg for Vec3x8 {
-    type Output = Vec3x8;
+impl<F: Floats> Neg for Vec3Lanes<F> {
+    type Output = Self;
     /// Flips each component's sign bit, as glam's `-v`.
     #[inline]
     fn neg(self) -> Self {
-        Vec3x8 {
+        Vec3Lanes {
             x: -self.x,
             y: -self.y,
             z: -self.z,
@@ -514,11 +351,11 @@ impl Neg for Vec3x8 {
     }
 }
 
-impl Add for Vec3x8 {
-    type Output = Vec3x8;
+impl<F: Floats> Add for Vec3Lanes<F> {
+    type Output = Self;
     #[inline]
     fn add(self, rhs: Self) -> Self {
-        Vec3x8 {
+        Vec3Lanes {
             x: self.x + rhs.x,
             y: self.y + rhs.y,
             z: self.z + rhs.z,
@@ -527,11 +364,11 @@ impl Add for Vec3x8 {
 }
 
 /// Each component divided by the lane's scalar (glam's `Vec3 / f32`).
-impl Div<F32x8> for Vec3x8 {
-    type Output = Vec3x8;
+impl<F: Floats> Div<F> for Vec3Lanes<F> {
+    type Output = Self;
     #[inline]
-    fn div(self, rhs: F32x8) -> Self {
-        Vec3x8 {
+    fn div(self, rhs: F) -> Self {
+        Vec3Lanes {
             x: self.x / rhs,
             y: self.y / rhs,
             z: self.z / rhs,
@@ -539,11 +376,11 @@ impl Div<F32x8> for Vec3x8 {
     }
 }
 
-impl Sub for Vec3x8 {
-    type Output = Vec3x8;
+impl<F: Floats> Sub for Vec3Lanes<F> {
+    type Output = Self;
     #[inline]
     fn sub(self, rhs: Self) -> Self {
-        Vec3x8 {
+        Vec3Lanes {
             x: self.x - rhs.x,
             y: self.y - rhs.y,
             z: self.z - rhs.z,
@@ -551,12 +388,12 @@ impl Sub for Vec3x8 {
     }
 }
 
-impl Mul for Vec3x8 {
-    type Output = Vec3x8;
+impl<F: Floats> Mul for Vec3Lanes<F> {
+    type Output = Self;
     /// Component by component, as glam's `Vec3 * Vec3`.
     #[inline]
     fn mul(self, rhs: Self) -> Self {
-        Vec3x8 {
+        Vec3Lanes {
             x: self.x * rhs.x,
             y: self.y * rhs.y,
             z: self.z * rhs.z,
@@ -564,128 +401,649 @@ impl Mul for Vec3x8 {
     }
 }
 
+/// The lane types of one width: `$floats` over `wide`'s `$wide` (its bits `$uint`), `$mask`
+/// with bits `$bits`, `$vec` the three-vectors, `$n` lanes.
+macro_rules! lanes {
+    ($floats:ident, $mask:ident, $vec:ident, $wide:ident, $uint:ident, $bits:ty, $n:literal) => {
+        #[doc = concat!(stringify!($n), " `f32` lanes.")]
+        #[derive(Clone, Copy, Debug)]
+        pub struct $floats($wide);
+
+        #[doc = concat!(stringify!($n), " lane flags (each lane all ones or all zeros), from comparisons.")]
+        #[derive(Clone, Copy, Debug)]
+        pub struct $mask($wide);
+
+        #[doc = concat!(stringify!($n), " 3-vectors as structure of arrays.")]
+        pub type $vec = Vec3Lanes<$floats>;
+
+        impl $floats {
+            pub const ZERO: $floats = $floats::splat(0.0);
+
+            #[inline]
+            pub const fn splat(value: f32) -> Self {
+                $floats($wide::splat(value))
+            }
+
+            #[inline]
+            pub const fn from_array(lanes: [f32; $n]) -> Self {
+                $floats($wide::new(lanes))
+            }
+
+            #[inline]
+            pub const fn to_array(self) -> [f32; $n] {
+                self.0.to_array()
+            }
+
+            /// Lane `i`, read in place.
+            #[inline]
+            pub fn lane(&self, i: usize) -> f32 {
+                self.0.as_array()[i]
+            }
+
+            /// Sets lane `i` in place (lanes written one by one cost no transposition after).
+            #[inline]
+            pub fn set_lane(&mut self, i: usize, value: f32) {
+                self.0.as_mut_array()[i] = value;
+            }
+
+            /// Lane-wise `if self < rhs { self } else { rhs }`: the x86 `minps` rule, and
+            /// glam's `Vec3::min`. NaN in either operand, or a tie such as `-0.0` against
+            /// `0.0`, gives `rhs`.
+            #[inline]
+            pub fn min(self, rhs: Self) -> Self {
+                // `minps` is exactly this rule (the unit tests pin it).
+                $floats(self.0.fast_min(rhs.0))
+            }
+
+            /// Lane-wise `if self > rhs { self } else { rhs }` (`maxps`, glam's
+            /// `Vec3::max`). NaN in either operand, or a tie, gives `rhs`.
+            #[inline]
+            pub fn max(self, rhs: Self) -> Self {
+                $floats(self.0.fast_max(rhs.0))
+            }
+
+            /// The larger operand, ignoring a NaN one as `f32::max` does; a tie (`-0.0`
+            /// against `0.0`) gives `rhs`, a rule `f32::max` leaves open. Scalar twin:
+            /// `intersect::max_num`.
+            #[inline]
+            pub fn max_num(self, rhs: Self) -> Self {
+                (self.gt(rhs) | rhs.is_nan()).select(self, rhs)
+            }
+
+            /// Correctly rounded square root (NaN for negative lanes), as `f32::sqrt`.
+            #[inline]
+            pub fn sqrt(self) -> Self {
+                $floats(self.0.sqrt())
+            }
+
+            /// Clears the sign bit, as `f32::abs`.
+            #[inline]
+            pub fn abs(self) -> Self {
+                $floats(self.0.abs())
+            }
+
+            /// The magnitude of `self` with the sign bit of `sign`, as `f32::copysign`
+            /// (NaN operands included: only bits move).
+            #[inline]
+            pub fn copysign(self, sign: Self) -> Self {
+                $floats(self.0.copysign(sign.0))
+            }
+
+            /// The smallest lane, by `min` between halves, then quarters, and so on down
+            /// to pairs: where no lane is NaN, the least value (either zero where `-0.0`
+            /// and `0.0` tie), as a fold of `f32::min` over the lanes gives.
+            #[inline]
+            pub fn min_lane(self) -> f32 {
+                self.reduce($floats::min)
+            }
+
+            /// The largest lane, as `min_lane` with `max`.
+            #[inline]
+            pub fn max_lane(self) -> f32 {
+                self.reduce($floats::max)
+            }
+
+            /// `combine` of the lanes pairwise: lane `i` with lane `i ^ half`, for halves
+            /// of the lanes, then of each half, down to pairs (shuffles).
+            #[inline(always)]
+            fn reduce(self, combine: impl Fn($floats, $floats) -> $floats) -> f32 {
+                let swapped = |v: $floats, half: usize| {
+                    let a = v.to_array();
+                    $floats::from_array(std::array::from_fn(|i| a[i ^ half]))
+                };
+                let mut folded = self;
+                if $n > 8 {
+                    folded = combine(folded, swapped(folded, 8));
+                }
+                folded = combine(folded, swapped(folded, 4));
+                folded = combine(folded, swapped(folded, 2));
+                combine(folded, swapped(folded, 1)).to_array()[0]
+            }
+
+            /// Ordered comparisons: a NaN lane compares false, as in scalar Rust.
+            #[inline]
+            pub fn lt(self, rhs: Self) -> $mask {
+                $mask(self.0.simd_lt(rhs.0))
+            }
+
+            #[inline]
+            pub fn le(self, rhs: Self) -> $mask {
+                $mask(self.0.simd_le(rhs.0))
+            }
+
+            #[inline]
+            pub fn gt(self, rhs: Self) -> $mask {
+                $mask(self.0.simd_gt(rhs.0))
+            }
+
+            #[inline]
+            pub fn ge(self, rhs: Self) -> $mask {
+                $mask(self.0.simd_ge(rhs.0))
+            }
+
+            /// Equality (`-0.0 == 0.0`; NaN equals nothing).
+            #[inline]
+            pub fn eq(self, rhs: Self) -> $mask {
+                $mask(self.0.simd_eq(rhs.0))
+            }
+
+            #[inline]
+            pub fn is_nan(self) -> $mask {
+                $mask(self.0.is_nan())
+            }
+
+            /// `self` raised to `exponent` lane by lane with `f32::powf` (the C library's
+            /// `powf`, whose exact bits no vector form here reproduces) in the lanes of
+            /// `lanes`, zero in the others.
+            #[inline]
+            pub fn powf(self, exponent: Self, lanes: $mask) -> Self {
+                let (base, exponent) = (self.to_array(), exponent.to_array());
+                let mut power = [0.0; $n];
+                for_lanes(lanes.bitmask(), |k| power[k] = base[k].powf(exponent[k]));
+                $floats::from_array(power)
+            }
+
+            /// The next float above each lane, as `f32::next_up` (NaN and infinity stay):
+            /// one step of the lane's bits, away from zero for positive lanes, towards it
+            /// for negative.
+            #[inline]
+            pub fn next_up(self) -> Self {
+                let bits = self.0.to_bits();
+                let magnitude = bits & $uint::splat(0x7fff_ffff);
+                let one = $uint::splat(1);
+                let positive = bits.simd_eq(magnitude);
+                let step = positive.select(bits + one, bits - one);
+                let next = magnitude.simd_eq($uint::ZERO).select(one, step);
+                let keep = self.is_nan() | self.eq($floats::splat(f32::INFINITY));
+                keep.select(self, $floats($wide::from_bits(next)))
+            }
+
+            /// The next float below each lane, as `f32::next_down`: `-(-x).next_up()`, bit
+            /// for bit.
+            #[inline]
+            pub fn next_down(self) -> Self {
+                -(-self).next_up()
+            }
+
+            /// Neither NaN nor infinite, as `f32::is_finite`.
+            #[inline]
+            pub fn is_finite(self) -> $mask {
+                self.abs().lt($floats::splat(f32::INFINITY))
+            }
+        }
+
+        impl Floats for $floats {
+            const LANES: usize = $n;
+            type Mask = $mask;
+            #[inline(always)]
+            fn splat(value: f32) -> Self {
+                $floats::splat(value)
+            }
+            #[inline(always)]
+            fn from_fn(lane: impl FnMut(usize) -> f32) -> Self {
+                $floats::from_array(std::array::from_fn(lane))
+            }
+            #[inline(always)]
+            fn lane(&self, i: usize) -> f32 {
+                $floats::lane(self, i)
+            }
+            #[inline(always)]
+            fn set_lane(&mut self, i: usize, value: f32) {
+                $floats::set_lane(self, i, value)
+            }
+            #[inline(always)]
+            fn min(self, rhs: Self) -> Self {
+                $floats::min(self, rhs)
+            }
+            #[inline(always)]
+            fn max(self, rhs: Self) -> Self {
+                $floats::max(self, rhs)
+            }
+            #[inline(always)]
+            fn max_num(self, rhs: Self) -> Self {
+                $floats::max_num(self, rhs)
+            }
+            #[inline(always)]
+            fn sqrt(self) -> Self {
+                $floats::sqrt(self)
+            }
+            #[inline(always)]
+            fn abs(self) -> Self {
+                $floats::abs(self)
+            }
+            #[inline(always)]
+            fn copysign(self, sign: Self) -> Self {
+                $floats::copysign(self, sign)
+            }
+            #[inline(always)]
+            fn min_lane(self) -> f32 {
+                $floats::min_lane(self)
+            }
+            #[inline(always)]
+            fn max_lane(self) -> f32 {
+                $floats::max_lane(self)
+            }
+            #[inline(always)]
+            fn lt(self, rhs: Self) -> $mask {
+                $floats::lt(self, rhs)
+            }
+            #[inline(always)]
+            fn le(self, rhs: Self) -> $mask {
+                $floats::le(self, rhs)
+            }
+            #[inline(always)]
+            fn gt(self, rhs: Self) -> $mask {
+                $floats::gt(self, rhs)
+            }
+            #[inline(always)]
+            fn ge(self, rhs: Self) -> $mask {
+                $floats::ge(self, rhs)
+            }
+            #[inline(always)]
+            fn eq(self, rhs: Self) -> $mask {
+                $floats::eq(self, rhs)
+            }
+            #[inline(always)]
+            fn is_nan(self) -> $mask {
+                $floats::is_nan(self)
+            }
+            #[inline(always)]
+            fn is_finite(self) -> $mask {
+                $floats::is_finite(self)
+            }
+            #[inline(always)]
+            fn powf(self, exponent: Self, lanes: $mask) -> Self {
+                $floats::powf(self, exponent, lanes)
+            }
+            #[inline(always)]
+            fn next_up(self) -> Self {
+                $floats::next_up(self)
+            }
+            #[inline(always)]
+            fn next_down(self) -> Self {
+                $floats::next_down(self)
+            }
+        }
+
+        impl Add for $floats {
+            type Output = $floats;
+            #[inline]
+            fn add(self, rhs: Self) -> Self {
+                $floats(self.0 + rhs.0)
+            }
+        }
+
+        impl Sub for $floats {
+            type Output = $floats;
+            #[inline]
+            fn sub(self, rhs: Self) -> Self {
+                $floats(self.0 - rhs.0)
+            }
+        }
+
+        impl Mul for $floats {
+            type Output = $floats;
+            #[inline]
+            fn mul(self, rhs: Self) -> Self {
+                $floats(self.0 * rhs.0)
+            }
+        }
+
+        impl Div for $floats {
+            type Output = $floats;
+            #[inline]
+            fn div(self, rhs: Self) -> Self {
+                $floats(self.0 / rhs.0)
+            }
+        }
+
+        impl Neg for $floats {
+            type Output = $floats;
+            /// Flips the sign bit, as scalar negation does (also for NaN and zero).
+            #[inline]
+            fn neg(self) -> Self {
+                $floats(-self.0)
+            }
+        }
+
+        impl $mask {
+            pub const ALL: $mask = $mask($wide::splat(f32::from_bits(u32::MAX)));
+            pub const NONE: $mask = $mask($wide::splat(0.0));
+
+            /// The mask whose lane `i` is set when bit `i` of `bits` is: a load from a table
+            /// for each eight lanes (building the lanes one by one showed up in profiles of
+            /// the traversal).
+            #[inline]
+            pub fn from_bitmask(bits: $bits) -> Self {
+                let mut lanes = [0.0; $n];
+                for (eight, chunk) in lanes.chunks_exact_mut(8).enumerate() {
+                    chunk.copy_from_slice(&MASKS[(bits >> (8 * eight)) as u8 as usize]);
+                }
+                $mask($wide::new(lanes))
+            }
+
+            /// Bit `i` set when lane `i` is.
+            #[inline]
+            pub fn bitmask(self) -> $bits {
+                self.0.to_bitmask() as $bits
+            }
+
+            #[inline]
+            pub fn any(self) -> bool {
+                self.0.any()
+            }
+
+            #[inline]
+            pub fn all(self) -> bool {
+                self.0.all()
+            }
+
+            #[inline]
+            pub fn none(self) -> bool {
+                !self.0.any()
+            }
+
+            /// `self & !rhs`: the lanes of `self` that `rhs` does not have.
+            #[inline]
+            pub fn and_not(self, rhs: $mask) -> $mask {
+                self & !rhs
+            }
+
+            /// Lane-wise `if self { if_true } else { if_false }`.
+            #[inline]
+            pub fn select(self, if_true: $floats, if_false: $floats) -> $floats {
+                $floats(self.0.select(if_true.0, if_false.0))
+            }
+
+            /// `select` on each component.
+            #[inline]
+            pub fn select_vec(self, if_true: $vec, if_false: $vec) -> $vec {
+                Vec3Lanes::select(self, if_true, if_false)
+            }
+        }
+
+        impl LaneMask for $mask {
+            type Floats = $floats;
+            type Bits = $bits;
+            const ALL: Self = $mask::ALL;
+            const NONE: Self = $mask::NONE;
+            #[inline(always)]
+            fn from_bitmask(bits: $bits) -> Self {
+                $mask::from_bitmask(bits)
+            }
+            #[inline(always)]
+            fn bitmask(self) -> $bits {
+                $mask::bitmask(self)
+            }
+            #[inline(always)]
+            fn any(self) -> bool {
+                $mask::any(self)
+            }
+            #[inline(always)]
+            fn all(self) -> bool {
+                $mask::all(self)
+            }
+            #[inline(always)]
+            fn none(self) -> bool {
+                $mask::none(self)
+            }
+            #[inline(always)]
+            fn and_not(self, rhs: Self) -> Self {
+                $mask::and_not(self, rhs)
+            }
+            #[inline(always)]
+            fn select(self, if_true: $floats, if_false: $floats) -> $floats {
+                $mask::select(self, if_true, if_false)
+            }
+        }
+
+        impl BitAnd for $mask {
+            type Output = $mask;
+            #[inline]
+            fn bitand(self, rhs: Self) -> Self {
+                $mask(self.0 & rhs.0)
+            }
+        }
+
+        impl BitOr for $mask {
+            type Output = $mask;
+            #[inline]
+            fn bitor(self, rhs: Self) -> Self {
+                $mask(self.0 | rhs.0)
+            }
+        }
+
+        impl Not for $mask {
+            type Output = $mask;
+            #[inline]
+            fn not(self) -> Self {
+                $mask(!self.0)
+            }
+        }
+
+        impl Vec3Lanes<$floats> {
+            pub const ZERO: $vec = Vec3Lanes {
+                x: $floats::ZERO,
+                y: $floats::ZERO,
+                z: $floats::ZERO,
+            };
+
+            /// Lane `i` from `lanes[i]`.
+            #[inline]
+            pub fn from_lanes(lanes: [Vec3; $n]) -> Self {
+                Vec3Lanes {
+                    x: $floats::from_array(lanes.map(|v| v.x)),
+                    y: $floats::from_array(lanes.map(|v| v.y)),
+                    z: $floats::from_array(lanes.map(|v| v.z)),
+                }
+            }
+        }
+    };
+}
+
+lanes!(F32x8, Mask8, Vec3x8, f32x8, u32x8, u8, 8);
+lanes!(F32x16, Mask16, Vec3x16, f32x16, u32x16, u16, 16);
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    #[test]
-    fn bitmasks_round_trip() {
-        for bits in 0..=255u8 {
-            assert_eq!(Mask8::from_bitmask(bits).bitmask(), bits);
-        }
-    }
-
     const NAN: f32 = f32::NAN;
 
-    fn bits(v: F32x8) -> [u32; 8] {
-        v.to_array().map(f32::to_bits)
-    }
+    /// The tests of one width's types: every operation against the scalar rule it
+    /// documents, bit for bit, on lanes whose first eight hold the special cases (and at
+    /// sixteen lanes, the next eight again, swapped).
+    macro_rules! lane_tests {
+        ($module:ident, $floats:ident, $mask:ident, $vec:ident, $bits:ty, $n:literal) => {
+            mod $module {
+                use super::*;
 
-    fn pairs() -> (F32x8, F32x8) {
-        let a = [NAN, 1.0, NAN, -0.0, 0.0, 2.0, -1.0, f32::INFINITY];
-        let b = [1.0, NAN, NAN, 0.0, -0.0, 3.0, -2.0, f32::NEG_INFINITY];
-        (F32x8::from_array(a), F32x8::from_array(b))
-    }
+                fn bits(v: $floats) -> [u32; $n] {
+                    v.to_array().map(f32::to_bits)
+                }
 
-    /// Every min/max helper against the scalar rule it documents, bit for bit.
-    #[test]
-    fn min_max_follow_their_scalar_rules() {
-        let (a, b) = pairs();
-        let (sa, sb) = (a.to_array(), b.to_array());
-        let lanes = |f: fn(f32, f32) -> f32| std::array::from_fn(|i| f(sa[i], sb[i]).to_bits());
-        assert_eq!(bits(a.min(b)), lanes(|x, y| if x < y { x } else { y }));
-        assert_eq!(bits(a.max(b)), lanes(|x, y| if x > y { x } else { y }));
-        assert_eq!(
-            bits(a.max_num(b)),
-            lanes(|x, y| if x > y || y.is_nan() { x } else { y })
-        );
-    }
+                fn lanes(first: [f32; 8], second: [f32; 8]) -> [f32; $n] {
+                    std::array::from_fn(|i| {
+                        if i % 16 < 8 {
+                            first[i % 8]
+                        } else {
+                            second[i % 8]
+                        }
+                    })
+                }
 
-    #[test]
-    fn nan_handling_of_min_max() {
-        let (a, b) = pairs();
-        // min/max: NaN on either side gives rhs.
-        assert!(a.min(b).to_array()[0] == 1.0 && a.min(b).to_array()[1].is_nan());
-        assert!(a.max(b).to_array()[0] == 1.0 && a.max(b).to_array()[1].is_nan());
-        // max_num drops a single NaN from either side, like f32::max.
-        for v in [a.max_num(b), b.max_num(a)] {
-            let v = v.to_array();
-            assert!(v[0] == 1.0 && v[1] == 1.0 && v[2].is_nan());
-        }
-        // Ties give rhs, so the sign of a zero result is defined.
-        assert_eq!(a.min(b).to_array()[3].to_bits(), 0.0f32.to_bits());
-        assert_eq!(a.max_num(b).to_array()[4].to_bits(), (-0.0f32).to_bits());
-    }
+                fn pairs() -> ($floats, $floats) {
+                    let a = [NAN, 1.0, NAN, -0.0, 0.0, 2.0, -1.0, f32::INFINITY];
+                    let b = [1.0, NAN, NAN, 0.0, -0.0, 3.0, -2.0, f32::NEG_INFINITY];
+                    (
+                        $floats::from_array(lanes(a, b)),
+                        $floats::from_array(lanes(b, a)),
+                    )
+                }
 
-    #[test]
-    fn comparisons_and_masks() {
-        let (a, b) = pairs();
-        assert_eq!(a.lt(b).bitmask(), 1 << 5);
-        assert_eq!(a.le(b).bitmask(), 1 << 3 | 1 << 4 | 1 << 5);
-        assert_eq!(a.gt(b).bitmask(), 1 << 6 | 1 << 7);
-        assert_eq!(a.ge(b).bitmask(), 1 << 3 | 1 << 4 | 1 << 6 | 1 << 7);
-        assert_eq!(a.eq(b).bitmask(), 1 << 3 | 1 << 4);
-        assert_eq!(a.is_nan().bitmask(), 0b101);
-        assert_eq!(a.is_finite().bitmask(), 0b0111_1010);
-        let m = Mask8::from_bitmask(0b1010_0110);
-        assert_eq!(m.bitmask(), 0b1010_0110);
-        assert_eq!((m & Mask8::from_bitmask(0b11)).bitmask(), 0b10);
-        assert_eq!((m | Mask8::from_bitmask(0b1)).bitmask(), 0b1010_0111);
-        assert_eq!(m.and_not(Mask8::from_bitmask(0b110)).bitmask(), 0b1010_0000);
-        assert_eq!((!m).bitmask(), 0b0101_1001);
-        assert!(m.any() && !m.all() && !m.none());
-        assert!(Mask8::ALL.all() && Mask8::NONE.none());
-        let picked = m.select(F32x8::splat(1.0), F32x8::splat(2.0)).to_array();
-        assert_eq!(picked, [2.0, 1.0, 1.0, 2.0, 2.0, 1.0, 2.0, 1.0]);
-    }
+                #[test]
+                fn bitmasks_round_trip() {
+                    for bits in (0..=<$bits>::MAX).step_by(7).chain([<$bits>::MAX]) {
+                        assert_eq!($mask::from_bitmask(bits).bitmask(), bits);
+                    }
+                }
 
-    #[test]
-    fn sign_and_root_helpers_match_scalar() {
-        let (a, b) = pairs();
-        let (sa, sb) = (a.to_array(), b.to_array());
-        let each = |f: &dyn Fn(f32, f32) -> f32| -> [u32; 8] {
-            std::array::from_fn(|i| f(sa[i], sb[i]).to_bits())
+                #[test]
+                fn min_max_follow_their_scalar_rules() {
+                    let (a, b) = pairs();
+                    let (sa, sb) = (a.to_array(), b.to_array());
+                    let each = |f: fn(f32, f32) -> f32| -> [u32; $n] {
+                        std::array::from_fn(|i| f(sa[i], sb[i]).to_bits())
+                    };
+                    assert_eq!(bits(a.min(b)), each(|x, y| if x < y { x } else { y }));
+                    assert_eq!(bits(a.max(b)), each(|x, y| if x > y { x } else { y }));
+                    assert_eq!(
+                        bits(a.max_num(b)),
+                        each(|x, y| if x > y || y.is_nan() { x } else { y })
+                    );
+                    // The lanes' least and largest, as a fold where no lane is NaN.
+                    let finite = $floats::from_fn(|i| (i as f32 * 7.25) % 5.5 - 2.0);
+                    let f = finite.to_array();
+                    assert_eq!(
+                        finite.min_lane(),
+                        f.iter().copied().fold(f32::INFINITY, f32::min)
+                    );
+                    assert_eq!(
+                        finite.max_lane(),
+                        f.iter().copied().fold(f32::NEG_INFINITY, f32::max)
+                    );
+                }
+
+                #[test]
+                fn comparisons_and_masks() {
+                    let (a, b) = pairs();
+                    let (sa, sb) = (a.to_array(), b.to_array());
+                    let each = |f: &dyn Fn(f32, f32) -> bool| -> $bits {
+                        (0..$n)
+                            .filter(|&i| f(sa[i], sb[i]))
+                            .fold(0, |m, i| m | 1 << i)
+                    };
+                    assert_eq!(a.lt(b).bitmask(), each(&|x, y| x < y));
+                    assert_eq!(a.le(b).bitmask(), each(&|x, y| x <= y));
+                    assert_eq!(a.gt(b).bitmask(), each(&|x, y| x > y));
+                    assert_eq!(a.ge(b).bitmask(), each(&|x, y| x >= y));
+                    assert_eq!(a.eq(b).bitmask(), each(&|x, y| x == y));
+                    assert_eq!(a.is_nan().bitmask(), each(&|x, _| x.is_nan()));
+                    assert_eq!(a.is_finite().bitmask(), each(&|x, _| x.is_finite()));
+                    let m = $mask::from_bitmask(0b1010_0110);
+                    assert_eq!((m & $mask::from_bitmask(0b11)).bitmask(), 0b10);
+                    assert_eq!((m | $mask::from_bitmask(0b1)).bitmask(), 0b1010_0111);
+                    assert_eq!(m.and_not($mask::from_bitmask(0b110)).bitmask(), 0b1010_0000);
+                    assert_eq!((!m).bitmask(), !0b1010_0110);
+                    assert!(m.any() && !m.all() && !m.none());
+                    assert!($mask::ALL.all() && $mask::NONE.none());
+                    let picked = m
+                        .select($floats::splat(1.0), $floats::splat(2.0))
+                        .to_array();
+                    assert_eq!(&picked[..8], &[2.0, 1.0, 1.0, 2.0, 2.0, 1.0, 2.0, 1.0]);
+                    assert!(picked[8..].iter().all(|&x| x == 2.0));
+                }
+
+                #[test]
+                fn sign_root_and_power_helpers_match_scalar() {
+                    let (a, b) = pairs();
+                    let (sa, sb) = (a.to_array(), b.to_array());
+                    let each = |f: &dyn Fn(f32, f32) -> f32| -> [u32; $n] {
+                        std::array::from_fn(|i| f(sa[i], sb[i]).to_bits())
+                    };
+                    assert_eq!(bits(a.copysign(b)), each(&|x, y| x.copysign(y)));
+                    assert_eq!(bits(a.abs()), each(&|x, _| x.abs()));
+                    assert_eq!(bits(b.sqrt()), each(&|_, y| y.sqrt()));
+                    assert_eq!(bits(-a), each(&|x, _| -x));
+                    let odd = $mask::from_bitmask(<$bits>::MAX / 3);
+                    let power = a.abs().powf(b.abs(), odd).to_array();
+                    for i in 0..$n {
+                        let expected = if odd.bitmask() >> i & 1 == 1 {
+                            sa[i].abs().powf(sb[i].abs())
+                        } else {
+                            0.0
+                        };
+                        assert_eq!(power[i].to_bits(), expected.to_bits(), "lane {i}");
+                    }
+                }
+
+                #[test]
+                fn next_up_and_down_match_scalar() {
+                    let specials = [
+                        0.0,
+                        -0.0,
+                        f32::MIN_POSITIVE,
+                        -f32::from_bits(1),
+                        f32::MAX,
+                        f32::MIN,
+                        f32::INFINITY,
+                        f32::NEG_INFINITY,
+                        NAN,
+                        -NAN,
+                        1.0,
+                        -1.0,
+                        1.5e-40,
+                        -3.25,
+                    ];
+                    for chunk in specials.chunks(8) {
+                        let mut eight = [0.5; 8];
+                        eight[..chunk.len()].copy_from_slice(chunk);
+                        let all = lanes(eight, eight);
+                        let v = $floats::from_array(all);
+                        assert_eq!(bits(v.next_up()), all.map(|x| x.next_up().to_bits()));
+                        assert_eq!(bits(v.next_down()), all.map(|x| x.next_down().to_bits()));
+                    }
+                }
+
+                #[test]
+                fn dot_and_cross_match_glam() {
+                    let u = Vec3::new(1.5, -2.25, 1e-3);
+                    let v = Vec3::new(-0.7, 3.1, 7.9);
+                    let (a, b) = ($vec::splat(u), $vec::splat(v));
+                    assert_eq!(a.dot(b).to_array()[3].to_bits(), u.dot(v).to_bits());
+                    assert_eq!(a.cross(b).lane(5), u.cross(v));
+                    assert_eq!(a.recip().lane($n - 1), u.recip());
+                    let lanes = $vec::from_lanes(std::array::from_fn(|i| u * i as f32));
+                    assert_eq!(lanes.lane($n - 1), u * ($n - 1) as f32);
+                }
+            }
         };
-        assert_eq!(bits(a.copysign(b)), each(&|x, y| x.copysign(y)));
-        assert_eq!(bits(a.abs()), each(&|x, _| x.abs()));
-        assert_eq!(bits(b.sqrt()), each(&|_, y| y.sqrt()));
-        assert_eq!(bits(-a), each(&|x, _| -x));
     }
 
-    #[test]
-    fn next_up_and_down_match_scalar() {
-        let specials = [
-            0.0,
-            -0.0,
-            f32::MIN_POSITIVE,
-            -f32::from_bits(1),
-            f32::MAX,
-            f32::MIN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            NAN,
-            -NAN,
-            1.0,
-            -1.0,
-            1.5e-40,
-            -3.25,
-        ];
-        for chunk in specials.chunks(8) {
-            let mut lanes = [0.5; 8];
-            lanes[..chunk.len()].copy_from_slice(chunk);
-            let v = F32x8::from_array(lanes);
-            assert_eq!(bits(v.next_up()), lanes.map(|x| x.next_up().to_bits()));
-            assert_eq!(bits(v.next_down()), lanes.map(|x| x.next_down().to_bits()));
-        }
-    }
+    lane_tests!(eight, F32x8, Mask8, Vec3x8, u8, 8);
+    lane_tests!(sixteen, F32x16, Mask16, Vec3x16, u16, 16);
 
     #[test]
-    fn dot_and_cross_match_glam() {
-        let u = Vec3::new(1.5, -2.25, 1e-3);
-        let v = Vec3::new(-0.7, 3.1, 7.9);
-        let (a, b) = (Vec3x8::splat(u), Vec3x8::splat(v));
-        assert_eq!(a.dot(b).to_array()[3].to_bits(), u.dot(v).to_bits());
-        assert_eq!(a.cross(b).lane(5), u.cross(v));
-        assert_eq!(a.recip().lane(0), u.recip());
+    fn lane_bits_iterate_and_count() {
+        let mut seen = Vec::new();
+        for_lanes(0b1001_0000_0000_0110u16, |k| seen.push(k));
+        assert_eq!(seen, [1, 2, 12, 15]);
+        assert_eq!(
+            (0b0110u8.count(), 0b0110u8.lowest(), 0b0110u8.highest()),
+            (2, 1, 2)
+        );
+        assert_eq!(<u16 as Bits>::first(16), u16::MAX);
+        assert_eq!(<u8 as Bits>::first(3), 0b111);
+        assert!(0b100u16.has(2) && !0b100u16.has(1) && 0u8.with(7) == 0x80);
     }
 }

@@ -23,15 +23,16 @@
 //!
 //! **Lane shares.** A visit by `n` lanes of a packet adds `SHARE / n` to each of them
 //! ([`Tally::node_share`], [`Tally::leaf_share`]; a single ray adds `SHARE`), so that the
-//! shares of a set's rays add up to its visits: `SHARE = 840` divides by 1 to 8, and the
-//! sums stay whole. The lanes active at a visit, on average, are then the nodes counted
+//! shares of a set's rays add up to its visits: [`SHARE`] divides by every lane count of a
+//! packet, and the sums stay whole. The lanes active at a visit, on average, are then the nodes counted
 //! over the visits.
 
-use crate::simd::for_lanes;
+use crate::simd::{for_lanes, LaneBits, PACKET};
 
 /// The share of a visit made by one ray alone, in [`Tally::node_share`] and
-/// [`Tally::leaf_share`]: 840 is divisible by every lane count from 1 to 8.
-pub const SHARE: u32 = 840;
+/// [`Tally::leaf_share`]: divisible by every lane count from 1 to [`PACKET`] (840 for 8
+/// lanes, 720720 for 16).
+pub const SHARE: u64 = if PACKET > 8 { 720_720 } else { 840 };
 
 /// How a walk counts: [`NoCount`] (nothing, the walks as they run) or [`Tally`] (one ray's
 /// work). A packet's walk counts into [`Count::Lanes`], lane by lane.
@@ -59,12 +60,12 @@ pub trait Count: Copy + Default + std::fmt::Debug + Send + Sync {
 /// A packet's counts, lane by lane: the same events as [`Count`], each for the lanes
 /// `lanes` that take part.
 pub trait CountLanes<C>: Default {
-    fn rays(&mut self, lanes: u8);
-    fn node(&mut self, lanes: u8);
-    fn boxes(&mut self, lanes: u8, n: u32);
-    fn leaf(&mut self, lanes: u8);
-    fn prims(&mut self, lanes: u8, n: u32);
-    fn cell(&mut self, lanes: u8);
+    fn rays(&mut self, lanes: LaneBits);
+    fn node(&mut self, lanes: LaneBits);
+    fn boxes(&mut self, lanes: LaneBits, n: u32);
+    fn leaf(&mut self, lanes: LaneBits);
+    fn prims(&mut self, lanes: LaneBits, n: u32);
+    fn cell(&mut self, lanes: LaneBits);
     /// Adds the counts of lane `k`'s walk made as a single ray.
     fn add_lane(&mut self, k: usize, count: &C);
     /// Lane `k`'s counts.
@@ -96,17 +97,17 @@ impl Count for NoCount {
 
 impl CountLanes<NoCount> for NoCount {
     #[inline(always)]
-    fn rays(&mut self, _: u8) {}
+    fn rays(&mut self, _: LaneBits) {}
     #[inline(always)]
-    fn node(&mut self, _: u8) {}
+    fn node(&mut self, _: LaneBits) {}
     #[inline(always)]
-    fn boxes(&mut self, _: u8, _: u32) {}
+    fn boxes(&mut self, _: LaneBits, _: u32) {}
     #[inline(always)]
-    fn leaf(&mut self, _: u8) {}
+    fn leaf(&mut self, _: LaneBits) {}
     #[inline(always)]
-    fn prims(&mut self, _: u8, _: u32) {}
+    fn prims(&mut self, _: LaneBits, _: u32) {}
     #[inline(always)]
-    fn cell(&mut self, _: u8) {}
+    fn cell(&mut self, _: LaneBits) {}
     #[inline(always)]
     fn add_lane(&mut self, _: usize, _: &NoCount) {}
     #[inline(always)]
@@ -131,9 +132,9 @@ pub struct Tally {
     /// Grid cells visited.
     pub cells: u32,
     /// The ray's shares of the node visits it took part in, [`SHARE`] for a visit alone.
-    pub node_share: u32,
+    pub node_share: u64,
     /// The ray's shares of the leaf tests it took part in.
-    pub leaf_share: u32,
+    pub leaf_share: u64,
 }
 
 /// The counters a cost image can show, by name.
@@ -239,39 +240,39 @@ impl Count for Tally {
 
 /// A packet's [`Tally`] per lane.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct LaneTallies(pub [Tally; 8]);
+pub struct LaneTallies(pub [Tally; PACKET]);
 
 impl LaneTallies {
-    fn each(&mut self, lanes: u8, mut count: impl FnMut(&mut Tally)) {
+    fn each(&mut self, lanes: LaneBits, mut count: impl FnMut(&mut Tally)) {
         for_lanes(lanes, |k| count(&mut self.0[k]));
     }
 }
 
 impl CountLanes<Tally> for LaneTallies {
-    fn rays(&mut self, lanes: u8) {
+    fn rays(&mut self, lanes: LaneBits) {
         self.each(lanes, |t| t.rays += 1);
     }
-    fn node(&mut self, lanes: u8) {
-        let share = SHARE / lanes.count_ones().max(1);
+    fn node(&mut self, lanes: LaneBits) {
+        let share = SHARE / u64::from(lanes.count_ones().max(1));
         self.each(lanes, |t| {
             t.nodes += 1;
             t.node_share += share;
         });
     }
-    fn boxes(&mut self, lanes: u8, n: u32) {
+    fn boxes(&mut self, lanes: LaneBits, n: u32) {
         self.each(lanes, |t| t.boxes += n);
     }
-    fn leaf(&mut self, lanes: u8) {
-        let share = SHARE / lanes.count_ones().max(1);
+    fn leaf(&mut self, lanes: LaneBits) {
+        let share = SHARE / u64::from(lanes.count_ones().max(1));
         self.each(lanes, |t| {
             t.leaves += 1;
             t.leaf_share += share;
         });
     }
-    fn prims(&mut self, lanes: u8, n: u32) {
+    fn prims(&mut self, lanes: LaneBits, n: u32) {
         self.each(lanes, |t| t.prims += n);
     }
-    fn cell(&mut self, lanes: u8) {
+    fn cell(&mut self, lanes: LaneBits) {
         self.each(lanes, |t| t.cells += 1);
     }
     fn add_lane(&mut self, k: usize, count: &Tally) {
@@ -288,13 +289,13 @@ mod tests {
 
     #[test]
     fn shares_of_a_packets_lanes_add_up_to_its_visits() {
-        for lanes in 1..=255u8 {
+        for lanes in 1..=LaneBits::MAX {
             let mut packet = LaneTallies::default();
             packet.node(lanes);
             packet.leaf(lanes);
-            let nodes: u32 = packet.0.iter().map(|t| t.node_share).sum();
-            let leaves: u32 = packet.0.iter().map(|t| t.leaf_share).sum();
-            assert_eq!((nodes, leaves), (SHARE, SHARE), "lanes {lanes:08b}");
+            let nodes: u64 = packet.0.iter().map(|t| t.node_share).sum();
+            let leaves: u64 = packet.0.iter().map(|t| t.leaf_share).sum();
+            assert_eq!((nodes, leaves), (SHARE, SHARE), "lanes {lanes:b}");
             let visited: u32 = packet.0.iter().map(|t| t.nodes).sum();
             assert_eq!(visited, lanes.count_ones());
         }

@@ -23,11 +23,11 @@ use super::bounds::prim_bounds;
 use super::count::{Count, CountLanes};
 use super::hit::{test_packet, ClosestHit};
 use super::structure::Structure;
-use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay, RayQuery, RayQuery8};
+use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay, PacketQuery, RayQuery};
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::scene::Geometry;
-use crate::simd::{for_lanes, F32x8};
+use crate::simd::{for_lanes, F32xP, LaneBits, PACKET};
 
 /// The report's `m`.
 pub const DEFAULT_DENSITY: f32 = 2.0;
@@ -235,8 +235,8 @@ impl Structure for Grid {
     fn closest_packet<C: Count>(
         &self,
         geometry: &Geometry,
-        query: &RayQuery8,
-        closest: &mut [ClosestHit; 8],
+        query: &PacketQuery,
+        closest: &mut [ClosestHit; PACKET],
         count: &mut C::Lanes,
     ) {
         let packet = query.packet;
@@ -283,13 +283,13 @@ impl Structure for Grid {
     fn occluded_packet<C: Count>(
         &self,
         geometry: &Geometry,
-        query: &RayQuery8,
+        query: &PacketQuery,
         count: &mut C::Lanes,
-    ) -> u8 {
+    ) -> LaneBits {
         let (packet, t_max) = (query.packet, &query.packet.t_max);
         let packet_inv_dir = packet.inv_dir_lanes();
         let mut walks = self.start_walks(packet, &packet_inv_dir, t_max, count);
-        let mut blocked = 0u8;
+        let mut blocked: LaneBits = 0;
         loop {
             let walking = lanes_of(&walks, |_| true) & !blocked;
             if walking == 0 {
@@ -318,7 +318,8 @@ impl Structure for Grid {
                     }
                     count.prims(open, 1);
                     let prim = self.prims[r as usize];
-                    let hits = geometry.intersect8(prim, query, F32x8::from_array(*t_max), open);
+                    let hits =
+                        geometry.intersect_packet(prim, query, F32xP::from_array(*t_max), open);
                     blocked |= hits.hit.bitmask() & open;
                 }
             });
@@ -370,10 +371,10 @@ impl Grid {
     fn start_walks<L: CountLanes<C>, C>(
         &self,
         packet: &RayPacket,
-        inv_dir: &[Vec3; 8],
-        t_max: &[f32; 8],
+        inv_dir: &[Vec3; PACKET],
+        t_max: &[f32; PACKET],
         count: &mut L,
-    ) -> [Option<Dda>; 8] {
+    ) -> [Option<Dda>; PACKET] {
         let (rays, t_min) = (packet.rays, packet.t_min);
         if !self.refs.is_empty() {
             count.boxes(packet.active, 1);
@@ -757,13 +758,17 @@ fn argmin(t: [f32; 3]) -> usize {
 const SINGLE_RAY_LANES: u32 = 2;
 
 /// The lanes whose walk goes on and satisfies `keep`, as a bit mask.
-fn lanes_of(walks: &[Option<Dda>; 8], keep: impl Fn(&Dda) -> bool) -> u8 {
+fn lanes_of(walks: &[Option<Dda>; PACKET], keep: impl Fn(&Dda) -> bool) -> LaneBits {
     lane_mask(|k| walks[k].as_ref().is_some_and(&keep))
 }
 
 /// Calls `visit` once per distinct cell among the walks of `lanes`, with the lanes that
 /// stand in it.
-fn for_cell_groups(walks: &[Option<Dda>; 8], lanes: u8, mut visit: impl FnMut(IVec3, u8)) {
+fn for_cell_groups(
+    walks: &[Option<Dda>; PACKET],
+    lanes: LaneBits,
+    mut visit: impl FnMut(IVec3, LaneBits),
+) {
     let mut left = lanes;
     while left != 0 {
         let first = walks[left.trailing_zeros() as usize]

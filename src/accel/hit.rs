@@ -1,11 +1,11 @@
 //! The closest-hit rule every structure keeps: the smallest `t`, and at equal `t` the
 //! smallest [`PrimId`], whatever order the primitives are tested in.
 
-use crate::intersect::{RayQuery, RayQuery8};
+use crate::intersect::{PacketQuery, RayQuery};
 use crate::prim::PrimId;
 use crate::ray::Hit;
 use crate::scene::Geometry;
-use crate::simd::{for_lanes, F32x8};
+use crate::simd::{for_lanes, F32xP, LaneBits, PACKET};
 
 /// The closest hit found so far along a ray, with the tie rule of brute force: at equal
 /// `t` the smaller [`PrimId`] wins, whatever order the primitives are tested in.
@@ -75,14 +75,14 @@ impl ClosestHit {
 /// them at once by its packet kernel, each lane within its own bound, and each lane's hit
 /// offered to its closest hit.
 pub fn test_packet(
-    closest: &mut [ClosestHit; 8],
+    closest: &mut [ClosestHit; PACKET],
     geometry: &Geometry,
     prim: PrimId,
-    query: &RayQuery8,
-    lanes: u8,
+    query: &PacketQuery,
+    lanes: LaneBits,
 ) {
-    let bounds = F32x8::from_array(closest.each_ref().map(ClosestHit::bound));
-    let hits = geometry.intersect8(prim, query, bounds, lanes);
+    let bounds = F32xP::from_array(closest.each_ref().map(ClosestHit::bound));
+    let hits = geometry.intersect_packet(prim, query, bounds, lanes);
     let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
     for_lanes(hits.hit.bitmask() & lanes, |k| {
         closest[k].offer(Hit {

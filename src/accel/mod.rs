@@ -30,11 +30,12 @@ mod structure;
 
 use std::time::{Duration, Instant};
 
-use crate::intersect::{IntersectOptions, RayQuery, RayQuery8, SphereRoots};
+use crate::intersect::{IntersectOptions, PacketQuery, RayQuery, SphereRoots};
 use crate::prim::PrimKind;
 use crate::ray::{lane_mask, Hit, Ray, RayPacket};
 pub use crate::scene::AccelKind;
 use crate::scene::Geometry;
+use crate::simd::{LaneBits, PACKET};
 use bvh2::Bvh2;
 pub use bvh2::BvhBuild;
 use bvh8::Bvh8;
@@ -226,8 +227,8 @@ impl Structure for Accel {
     fn closest_packet<C: Count>(
         &self,
         geometry: &Geometry,
-        query: &RayQuery8,
-        closest: &mut [ClosestHit; 8],
+        query: &PacketQuery,
+        closest: &mut [ClosestHit; PACKET],
         count: &mut C::Lanes,
     ) {
         with_structure!(self, |s| s
@@ -238,9 +239,9 @@ impl Structure for Accel {
     fn occluded_packet<C: Count>(
         &self,
         geometry: &Geometry,
-        query: &RayQuery8,
+        query: &PacketQuery,
         count: &mut C::Lanes,
-    ) -> u8 {
+    ) -> LaneBits {
         with_structure!(self, |s| s.occluded_packet::<C>(geometry, query, count))
     }
 }
@@ -350,10 +351,10 @@ impl<'s> Tracer<'s> {
 
     /// The closest hit of each active lane of `packet` within its interval; `None` for
     /// the other lanes. The same hits as [`Tracer::closest`] gives each ray; the 8-wide
-    /// BVH and the grid trace them as one packet, and the planes are tested eight rays at
-    /// a time.
+    /// BVH and the grid trace them as one packet, and the planes are tested a packet's rays
+    /// at a time.
     #[inline]
-    pub fn closest_packet(&self, packet: &RayPacket) -> [Option<Hit>; 8] {
+    pub fn closest_packet(&self, packet: &RayPacket) -> [Option<Hit>; PACKET] {
         self.closest_packet_counting::<NoCount>(packet, &mut NoCount)
     }
 
@@ -362,7 +363,7 @@ impl<'s> Tracer<'s> {
         &self,
         packet: &RayPacket,
         count: &mut C::Lanes,
-    ) -> [Option<Hit>; 8] {
+    ) -> [Option<Hit>; PACKET] {
         count.rays(packet.active);
         let active = packet.active & packet.traceable();
         let traceable;
@@ -373,7 +374,7 @@ impl<'s> Tracer<'s> {
             packet
         };
         let mut closest = packet.t_max.map(ClosestHit::new);
-        let query = RayQuery8 {
+        let query = PacketQuery {
             packet,
             options: self.options,
         };
@@ -393,7 +394,7 @@ impl<'s> Tracer<'s> {
     /// mask: the answers of [`Tracer::occluded`], traced as one packet by the 8-wide BVH
     /// and the grid.
     #[inline]
-    pub fn occluded_packet(&self, packet: &RayPacket) -> u8 {
+    pub fn occluded_packet(&self, packet: &RayPacket) -> LaneBits {
         self.occluded_packet_counting::<NoCount>(packet, &mut NoCount)
     }
 
@@ -402,15 +403,15 @@ impl<'s> Tracer<'s> {
         &self,
         packet: &RayPacket,
         count: &mut C::Lanes,
-    ) -> u8 {
+    ) -> LaneBits {
         count.rays(packet.active);
         let active = packet.active & packet.traceable();
         let options = self.options;
-        let query = RayQuery8 { packet, options };
+        let query = PacketQuery { packet, options };
         let planes = self.closest_planes(&query, active, packet.t_max, count);
         let by_plane = lane_mask(|k| planes[k].is_some());
         let rest = packet.with_active(active & !by_plane);
-        let query = RayQuery8 {
+        let query = PacketQuery {
             packet: &rest,
             options,
         };
@@ -421,21 +422,21 @@ impl<'s> Tracer<'s> {
     }
 
     /// [`Tracer::closest_plane`] for the lanes `lanes` of `query`'s packet, each within
-    /// `(t_min, t_max[k])`: each plane against the eight rays at once by its packet
+    /// `(t_min, t_max[k])`: each plane against the packet's rays at once by its packet
     /// kernel, which answers each lane as the scalar test does
     /// (`tests/integration/simd.rs`).
     fn closest_planes<C>(
         &self,
-        query: &RayQuery8,
-        lanes: u8,
-        t_max: [f32; 8],
+        query: &PacketQuery,
+        lanes: LaneBits,
+        t_max: [f32; PACKET],
         count: &mut impl CountLanes<C>,
-    ) -> [Option<Hit>; 8] {
+    ) -> [Option<Hit>; PACKET] {
         if PrimKind::UNBOUNDED
             .iter()
             .all(|&kind| self.geometry.count(kind) == 0)
         {
-            return [None; 8];
+            return [None; PACKET];
         }
         let mut closest = t_max.map(ClosestHit::new);
         for kind in PrimKind::UNBOUNDED {

@@ -1,4 +1,4 @@
-//! The stream scheduler: many independent queries traced as packets of eight through
+//! The stream scheduler: many independent queries traced as packets of [`PACKET`] rays through
 //! [`Tracer::closest_packet`] and [`Tracer::occluded_packet`], each answered as its single
 //! ray. The renderer's queues (`render/stream.rs`) and the protocol's `p3trace-stream`
 //! path (`bench.rs`) both trace through it.
@@ -6,7 +6,7 @@
 //! Closest-hit queries go in the order they come: the renderer's queues keep a tile's
 //! rays together, the protocol's sets their pixel blocks. Occlusion queries are grouped by
 //! the light they head for ([`Occlusions`]), in their order within each light, so that a
-//! packet's rays share an end point. Both are packed eight at a time by [`Packer`], which
+//! packet's rays share an end point. Both are packed a packet at a time by [`Packer`], which
 //! traces a packet as soon as it is full: the renderer's shadow rays, made light by light,
 //! go to one directly, and [`Occlusions`] keeps one for each light.
 //! What the other groupings cost, by end point and by direction octant, is in
@@ -21,7 +21,7 @@ use glam::Vec3;
 use super::count::{Count, CountLanes, NoCount};
 use super::Tracer;
 use crate::ray::{Hit, Ray, RayPacket};
-use crate::simd::for_lanes;
+use crate::simd::{for_lanes, Bits, LaneBits, PACKET};
 
 /// One query of a stream: a ray and the far end of its interval, which starts at 0.
 pub trait Query: Copy {
@@ -51,7 +51,7 @@ impl<Q: Query> Query for &Q {
     }
 }
 
-/// Traces `queries` in their order as packets of eight, and gives `hits` each packet's
+/// Traces `queries` in their order as packets, and gives `hits` each packet's
 /// queries and their closest hits.
 #[inline]
 pub fn closest<Q: Query>(
@@ -156,15 +156,15 @@ impl<T, B: FnMut(T)> Answers<B, fn(T, NoCount)> {
     }
 }
 
-/// Occlusion queries packed eight at a time in the order they come, each packet traced
+/// Occlusion queries packed a packet ([`PACKET`] rays) at a time in the order they come, each packet traced
 /// through [`Tracer::occluded_packet`] as soon as it is full (or flushed), the tags of its
 /// blocked queries handed back. A stream grouped by light goes through it directly;
 /// [`Occlusions`] keeps one for each light.
 pub struct Packer<'t, T, C = NoCount> {
     tracer: &'t Tracer<'t>,
-    rays: [Ray; 8],
-    t_max: [f32; 8],
-    tags: [T; 8],
+    rays: [Ray; PACKET],
+    t_max: [f32; PACKET],
+    tags: [T; PACKET],
     len: usize,
     count: std::marker::PhantomData<C>,
 }
@@ -173,9 +173,9 @@ impl<'t, T: Copy + Default, C: Count> Packer<'t, T, C> {
     pub fn new(tracer: &'t Tracer<'t>) -> Self {
         Packer {
             tracer,
-            rays: [Ray::new(Vec3::ZERO, Vec3::ZERO); 8],
-            t_max: [0.0; 8],
-            tags: [T::default(); 8],
+            rays: [Ray::new(Vec3::ZERO, Vec3::ZERO); PACKET],
+            t_max: [0.0; PACKET],
+            tags: [T::default(); PACKET],
             len: 0,
             count: std::marker::PhantomData,
         }
@@ -194,7 +194,7 @@ impl<'t, T: Copy + Default, C: Count> Packer<'t, T, C> {
         let k = self.len;
         (self.rays[k], self.t_max[k], self.tags[k]) = (*ray, t_max, tag);
         self.len += 1;
-        if self.len == 8 {
+        if self.len == PACKET {
             self.flush(answer);
         }
     }
@@ -206,10 +206,10 @@ impl<'t, T: Copy + Default, C: Count> Packer<'t, T, C> {
         if n == 0 {
             return;
         }
-        for k in n..8 {
+        for k in n..PACKET {
             (self.rays[k], self.t_max[k]) = (self.rays[0], self.t_max[0]);
         }
-        let active = (1u16 << n).wrapping_sub(1) as u8;
+        let active = LaneBits::first(n);
         let packet = RayPacket::new(&self.rays)
             .with_t_max(self.t_max)
             .with_active(active);
@@ -226,7 +226,7 @@ impl<'t, T: Copy + Default, C: Count> Packer<'t, T, C> {
     }
 }
 
-/// Traces `queries` in their order as packets of eight by `trace`, and gives `answer`
+/// Traces `queries` in their order as packets by `trace`, and gives `answer`
 /// each packet's queries and its answer. A packet's missing lanes repeat its first query
 /// and are inactive.
 fn packets<Q: Query, A>(
@@ -236,7 +236,7 @@ fn packets<Q: Query, A>(
 ) {
     let mut queries = queries.into_iter();
     while let Some(first) = queries.next() {
-        let mut lanes = [first; 8];
+        let mut lanes = [first; PACKET];
         let mut n = 1;
         // `zip` asks `queries` for no more than the free lanes.
         for (lane, query) in lanes[1..].iter_mut().zip(queries.by_ref()) {
@@ -246,7 +246,7 @@ fn packets<Q: Query, A>(
         let rays = lanes.map(|q| *q.ray());
         let packet = RayPacket::new(&rays)
             .with_t_max(lanes.map(|q| q.t_max()))
-            .with_active((1u16 << n).wrapping_sub(1) as u8);
+            .with_active(LaneBits::first(n));
         answer(&lanes[..n], trace(&packet));
     }
 }

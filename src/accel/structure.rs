@@ -3,10 +3,10 @@
 
 use super::count::{Count, CountLanes};
 use super::hit::ClosestHit;
-use crate::intersect::{RayQuery, RayQuery8};
+use crate::intersect::{PacketQuery, RayQuery};
 use crate::ray::lane_mask;
 use crate::scene::Geometry;
-use crate::simd::for_lanes;
+use crate::simd::{for_lanes, LaneBits, PACKET};
 
 /// An acceleration structure's queries, each answered as brute force answers it
 /// (`accel::ClosestHit`'s tie rule), each counting its work into a [`Count`] (nothing, for
@@ -36,8 +36,8 @@ pub trait Structure {
     fn closest_packet<C: Count>(
         &self,
         geometry: &Geometry,
-        query: &RayQuery8,
-        closest: &mut [ClosestHit; 8],
+        query: &PacketQuery,
+        closest: &mut [ClosestHit; PACKET],
         count: &mut C::Lanes,
     ) {
         for_lanes(query.packet.active, |k| {
@@ -52,9 +52,9 @@ pub trait Structure {
     fn occluded_packet<C: Count>(
         &self,
         geometry: &Geometry,
-        query: &RayQuery8,
+        query: &PacketQuery,
         count: &mut C::Lanes,
-    ) -> u8 {
+    ) -> LaneBits {
         let packet = query.packet;
         lane_mask(|k| {
             packet.active & (1 << k) != 0 && {

@@ -1,4 +1,4 @@
-//! The Box primitive's test and its SIMD twins (eight rays against one box; one ray
+//! The Box primitive's test and its SIMD twins (a packet's rays against one box; one ray
 //! against a [`BoxPack8`] of a BVH leaf). It is exact: it returns where the ray meets the
 //! box's surface (the entry, or the exit from inside) in the open interval
 //! `(t_min, t_max)`, as every primitive test does, so a ray passing beside the box misses
@@ -9,12 +9,13 @@
 
 use glam::Vec3;
 
-use super::{first_root_in, first_root_in8};
+use super::{first_root_in, first_root_in_lanes};
 use super::{
-    Aabb, LeafPack, RayQuery, RayQuery8, Shapes, SurfacePoint, TriangleHit, TriangleHit8, Vec3s,
+    Aabb, LeafPack, PacketHits, PacketQuery, RayQuery, Shapes, SurfacePoint, TriangleHit,
+    TriangleHit8, Vec3s,
 };
 use crate::ray::{Ray, RayPacket};
-use crate::simd::{F32x8, Mask8, Vec3x8};
+use crate::simd::{F32x8, F32xP, Floats, LaneBits, Mask8, MaskP, Vec3Lanes, Vec3x8, Vec3xP};
 
 /// Slab test against the axis-aligned box `[min, max]`, with `inv_dir = 1 / ray.dir`
 /// computed once per ray. Returns the entry distance, or the exit distance when the
@@ -90,25 +91,25 @@ impl BoxPack8 {
     }
 }
 
-/// [`aabb`] for eight rays (with their `inv_dir`) against one box; lanes outside
+/// [`aabb`] for a packet's rays (with their `inv_dir`) against one box; lanes outside
 /// `active` miss.
 pub fn aabb_packet(
     rays: &RayPacket,
     min: Vec3,
     max: Vec3,
-    t_min: F32x8,
-    t_max: F32x8,
-    active: u8,
-) -> (Mask8, F32x8) {
+    t_min: F32xP,
+    t_max: F32xP,
+    active: LaneBits,
+) -> (MaskP, F32xP) {
     let (hit, t) = aabb_lanes(
         rays.origin,
         rays.inv_dir,
-        Vec3x8::splat(min),
-        Vec3x8::splat(max),
+        Vec3xP::splat(min),
+        Vec3xP::splat(max),
         t_min,
         t_max,
     );
-    (hit & Mask8::from_bitmask(active), t)
+    (hit & MaskP::from_bitmask(active), t)
 }
 
 /// [`aabb`] for one ray against the eight boxes of a pack.
@@ -132,23 +133,23 @@ pub fn aabb_leaf(
 /// The body of [`aabb`], lane by lane, with glam's `min`/`max` rule ([`F32x8::min`]) and
 /// the order of [`largest`] and [`smallest`].
 #[inline(always)]
-fn aabb_lanes(
-    origin: Vec3x8,
-    inv_dir: Vec3x8,
-    min: Vec3x8,
-    max: Vec3x8,
-    t_min: F32x8,
-    t_max: F32x8,
-) -> (Mask8, F32x8) {
+fn aabb_lanes<F: Floats>(
+    origin: Vec3Lanes<F>,
+    inv_dir: Vec3Lanes<F>,
+    min: Vec3Lanes<F>,
+    max: Vec3Lanes<F>,
+    t_min: F,
+    t_max: F,
+) -> (F::Mask, F) {
     let t1 = (min - origin) * inv_dir;
     let t2 = (max - origin) * inv_dir;
     let (lo, hi) = (
-        Vec3x8 {
+        Vec3Lanes {
             x: t1.x.min(t2.x),
             y: t1.y.min(t2.y),
             z: t1.z.min(t2.z),
         },
-        Vec3x8 {
+        Vec3Lanes {
             x: t1.x.max(t2.x),
             y: t1.y.max(t2.y),
             z: t1.z.max(t2.z),
@@ -156,7 +157,7 @@ fn aabb_lanes(
     );
     let near = lo.x.max(lo.y.max(lo.z));
     let far = hi.x.min(hi.y.min(hi.z));
-    let (hit, t) = first_root_in8(near, far, t_min, t_max);
+    let (hit, t) = first_root_in_lanes(near, far, t_min, t_max);
     (hit & near.le(far), t)
 }
 
@@ -203,26 +204,31 @@ impl LeafPack for Boxes {
     }
 
     #[inline(always)]
-    fn slot8(
+    fn slot_packet(
         pack: &BoxPack8,
         slot: usize,
-        query: &RayQuery8,
-        t_max: F32x8,
-        active: u8,
-    ) -> TriangleHit8 {
-        aabb8(query, pack.corners(slot), t_max, active)
+        query: &PacketQuery,
+        t_max: F32xP,
+        active: LaneBits,
+    ) -> PacketHits {
+        aabb_in_packet(query, pack.corners(slot), t_max, active)
     }
 }
 
 /// [`aabb_packet`] for the lanes `active` of `query`'s packet, in the form of the
 /// storage's and the pack's packet tests.
 #[inline(always)]
-fn aabb8(query: &RayQuery8, (min, max): (Vec3, Vec3), t_max: F32x8, active: u8) -> TriangleHit8 {
-    TriangleHit8::at(aabb_packet(
+fn aabb_in_packet(
+    query: &PacketQuery,
+    (min, max): (Vec3, Vec3),
+    t_max: F32xP,
+    active: LaneBits,
+) -> PacketHits {
+    PacketHits::at(aabb_packet(
         query.packet,
         min,
         max,
-        query.t_min8(),
+        query.t_min_lanes(),
         t_max,
         active,
     ))
@@ -249,8 +255,14 @@ impl Shapes for Boxes {
         aabb(ray, inv_dir, self.min.get(i), self.max.get(i), t_min, t_max).map(TriangleHit::at)
     }
 
-    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
-        aabb8(query, (self.min.get(i), self.max.get(i)), t_max, active)
+    fn intersect_packet(
+        &self,
+        i: usize,
+        query: &PacketQuery,
+        t_max: F32xP,
+        active: LaneBits,
+    ) -> PacketHits {
+        aabb_in_packet(query, (self.min.get(i), self.max.get(i)), t_max, active)
     }
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {

@@ -1,5 +1,5 @@
 //! The cone and cylinder kind: its storage ([`Cones`]), the ray test of an open frustum
-//! and its packet twin (eight rays against one cone), and the normal.
+//! and its packet twin (a packet's rays against one cone), and the normal.
 //!
 //! Cones have no BVH leaf pack. One (a `ConePack8` and a leaf kernel over the packet
 //! kernel's body) cut the instructions of `bench` by 13% and of a render by 11% on a
@@ -10,11 +10,11 @@
 use glam::Vec3;
 
 use super::{
-    gamma, max_num, trusted_box, Aabb, RayQuery, RayQuery8, Shapes, SurfacePoint, TriangleHit,
-    TriangleHit8, Vec3s,
+    gamma, max_num, trusted_box, Aabb, PacketHits, PacketQuery, RayQuery, Shapes, SurfacePoint,
+    TriangleHit, Vec3s,
 };
 use crate::ray::{Ray, RayPacket};
-use crate::simd::{F32x8, Mask8, Vec3x8};
+use crate::simd::{F32xP, LaneBits, MaskP, Vec3xP};
 
 /// Ray test against the open (uncapped) cone frustum or cylinder from `base` along the unit
 /// `axis` for `height`, with radius `r_base` at the base and `r_apex` at the far end.
@@ -74,7 +74,7 @@ pub fn cone(
     on_surface(near).or_else(|| on_surface(far))
 }
 
-/// [`cone`] for eight rays against one cone; lanes outside `active` miss. Both the
+/// [`cone`] for a packet's rays against one cone; lanes outside `active` miss. Both the
 /// linear and the quadratic case are computed and chosen per lane.
 #[allow(clippy::too_many_arguments)] // as `cone`, with the lane mask
 pub fn cone_packet(
@@ -84,38 +84,38 @@ pub fn cone_packet(
     height: f32,
     r_base: f32,
     r_apex: f32,
-    t_min: F32x8,
-    t_max: F32x8,
-    active: u8,
-) -> (Mask8, F32x8) {
-    let zero = F32x8::ZERO;
+    t_min: F32xP,
+    t_max: F32xP,
+    active: LaneBits,
+) -> (MaskP, F32xP) {
+    let zero = F32xP::ZERO;
     let slope_f = (r_apex - r_base) / height;
-    let (slope, slope2) = (F32x8::splat(slope_f), F32x8::splat(slope_f * slope_f));
-    let (axis, height) = (Vec3x8::splat(axis), F32x8::splat(height));
+    let (slope, slope2) = (F32xP::splat(slope_f), F32xP::splat(slope_f * slope_f));
+    let (axis, height) = (Vec3xP::splat(axis), F32xP::splat(height));
     let (origin, dir) = (rays.origin, rays.dir);
-    let from_base = origin - Vec3x8::splat(base);
-    let t0 = (axis.scale(F32x8::splat(0.5) * height) - from_base).dot(dir);
+    let from_base = origin - Vec3xP::splat(base);
+    let t0 = (axis.scale(F32xP::splat(0.5) * height) - from_base).dot(dir);
     let offset = from_base + dir.scale(t0);
     let d_axial = dir.dot(axis);
     let o_axial = offset.dot(axis);
     let d_perp = dir - axis.scale(d_axial);
     let o_perp = offset - axis.scale(o_axial);
-    let r_origin = F32x8::splat(r_base) + slope * o_axial;
+    let r_origin = F32xP::splat(r_base) + slope * o_axial;
     let d_perp2 = d_perp.dot(d_perp);
     let a = d_perp2 - slope2 * d_axial * d_axial;
     let half_b = o_perp.dot(d_perp) - slope * d_axial * r_origin;
     let c = o_perp.dot(o_perp) - r_origin * r_origin;
 
     // As `cone`'s: whether `t0 + dt` is on the frustum and in the interval.
-    let on_surface = |dt: F32x8| {
+    let on_surface = |dt: F32xP| {
         let (s, t) = (o_axial + dt * d_axial, t0 + dt);
         t.gt(t_min) & t.lt(t_max) & zero.le(s) & s.le(height)
     };
     // Parallel to the side: the linear equation.
     let linear = a
         .abs()
-        .le(F32x8::splat(1e-12) * d_perp2.max_num(d_axial * d_axial));
-    let t_line = -c / (F32x8::splat(2.0) * half_b);
+        .le(F32xP::splat(1e-12) * d_perp2.max_num(d_axial * d_axial));
+    let t_line = -c / (F32xP::splat(2.0) * half_b);
     let hit_line = on_surface(t_line).and_not(half_b.eq(zero));
     // Otherwise the quadratic, near root first.
     let disc = half_b * half_b - a * c;
@@ -129,7 +129,7 @@ pub fn cone_packet(
 
     let hit = (linear & hit_line) | hit_quad.and_not(linear);
     (
-        hit & Mask8::from_bitmask(active),
+        hit & MaskP::from_bitmask(active),
         t0 + linear.select(t_line, t_quad),
     )
 }
@@ -185,18 +185,24 @@ impl Shapes for Cones {
             .map(TriangleHit::at)
     }
 
-    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
+    fn intersect_packet(
+        &self,
+        i: usize,
+        query: &PacketQuery,
+        t_max: F32xP,
+        active: LaneBits,
+    ) -> PacketHits {
         let (base, axis, height) = (self.base.get(i), self.axis.get(i), self.height[i]);
-        let (r_base, r_apex, t_min) = (self.r_base[i], self.r_apex[i], query.t_min8());
+        let (r_base, r_apex, t_min) = (self.r_base[i], self.r_apex[i], query.t_min_lanes());
         let rays = query.packet;
         let (hit, t) = cone_packet(
             rays, base, axis, height, r_base, r_apex, t_min, t_max, active,
         );
         if hit.none() {
-            return TriangleHit8::at((hit, t));
+            return PacketHits::at((hit, t));
         }
         let trusted = trusted_box(self.bounds(i, [0.0; 2]), 0.0);
-        TriangleHit8::at((hit & query.holds(trusted, t), t))
+        PacketHits::at((hit & query.holds(trusted, t), t))
     }
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {

@@ -12,7 +12,7 @@
 //! off by up to `GAMMA_3` of themselves, enough to pass beside a box the objects' tests
 //! find the ray in (`tests/integration/fuzz_findings.rs`).
 //!
-//! **Per-ray setup.** [`BoxRay`] (one ray) and [`BoxRay8`] (a packet) are built once per
+//! **Per-ray setup.** [`BoxRay`] (one ray) and [`BoxRays`] (a packet) are built once per
 //! ray, as Embree's `TravRay` is: the origin and a safe inverse direction, whose
 //! infinite components (a ray parallel to an axis) are clamped to `±f32::MAX` (as
 //! Embree's `rcp_safe` keeps them finite). So no slab distance is NaN: the `0 * inf` of a
@@ -42,7 +42,7 @@
 //! the widenings are plain products.
 //!
 //! The SIMD twins ([`BoxRay::intervals8`], one ray against eight boxes, and
-//! [`BoxRay8::interval`], eight rays against one box) repeat the scalar arithmetic in the
+//! [`BoxRays::interval`], a packet's rays against one box) repeat the scalar arithmetic in the
 //! same order, so each lane equals [`BoxRay::interval`] bit for bit
 //! (`tests/integration/simd.rs`).
 
@@ -50,7 +50,9 @@ use glam::Vec3;
 
 use super::{BoxPack8, GAMMA_3};
 use crate::ray::RayPacket;
-use crate::simd::{F32x8, Mask8, Vec3x8};
+use crate::simd::{
+    F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3Lanes, Vec3x8, Vec3xP,
+};
 
 /// The rounding a box test allows for: twice the error bound of a slab distance.
 const ALLOWANCE: f32 = 2.0 * GAMMA_3;
@@ -77,14 +79,14 @@ pub fn beyond(entry: f32, limit: f32) -> bool {
 
 /// [`beyond`] lane by lane: the lanes whose `limit` the entry `entry` lies beyond.
 #[inline]
-pub fn beyond8(entry: F32x8, limit: F32x8) -> Mask8 {
-    entry.gt(widen_exit8(limit))
+pub fn beyond_lanes<F: Floats>(entry: F, limit: F) -> F::Mask {
+    entry.gt(widen_exit_lanes(limit))
 }
 
 /// [`widen_exit`] lane by lane.
 #[inline(always)]
-fn widen_exit8(t: F32x8) -> F32x8 {
-    t * F32x8::splat(1.0 + ALLOWANCE)
+fn widen_exit_lanes<F: Floats>(t: F) -> F {
+    t * F::splat(1.0 + ALLOWANCE)
 }
 
 /// `if a > b { a } else { b }`: the `maxps` rule, so a NaN `a` keeps `b`.
@@ -184,23 +186,23 @@ impl BoxRay {
     }
 }
 
-/// Eight rays set up for box tests together: [`BoxRay`] lane by lane.
+/// A packet's rays set up for box tests together: [`BoxRay`] lane by lane.
 #[derive(Clone, Copy, Debug)]
-pub struct BoxRay8 {
-    origin: Vec3x8,
+pub struct BoxRays {
+    origin: Vec3xP,
     /// `1 / dir` with infinities clamped to `±f32::MAX`, lane by lane.
-    inv_dir: Vec3x8,
+    inv_dir: Vec3xP,
 }
 
-impl BoxRay8 {
+impl BoxRays {
     /// The setup of the packet's rays, with the `inv_dir` it holds.
     #[inline]
     pub fn new(rays: &RayPacket) -> Self {
-        let clamp = |t: F32x8| t.max(F32x8::splat(-f32::MAX)).min(F32x8::splat(f32::MAX));
+        let clamp = |t: F32xP| t.max(F32xP::splat(-f32::MAX)).min(F32xP::splat(f32::MAX));
         let inv = rays.inv_dir;
-        BoxRay8 {
+        BoxRays {
             origin: rays.origin,
-            inv_dir: Vec3x8 {
+            inv_dir: Vec3xP {
                 x: clamp(inv.x),
                 y: clamp(inv.y),
                 z: clamp(inv.z),
@@ -211,29 +213,29 @@ impl BoxRay8 {
     /// [`BoxRay::holds`] for each ray against the box `[min, max]`, lane `k` with its
     /// own `t_min` and hit `t`.
     #[inline]
-    pub fn holds(&self, min: Vec3, max: Vec3, t_min: F32x8, t: F32x8) -> Mask8 {
-        self.interval(min, max, t_min, F32x8::splat(f32::INFINITY))
+    pub fn holds(&self, min: Vec3, max: Vec3, t_min: F32xP, t: F32xP) -> MaskP {
+        self.interval(min, max, t_min, F32xP::splat(f32::INFINITY))
             .holds(t)
     }
 
     /// The lanes `lanes` as one [`RayRange`], if their directions agree in sign.
     #[inline]
-    pub fn range(&self, lanes: u8) -> Option<RayRange> {
+    pub fn range(&self, lanes: LaneBits) -> Option<RayRange> {
         if lanes == 0 {
             return None;
         }
-        let keep = Mask8::from_bitmask(lanes);
+        let keep = MaskP::from_bitmask(lanes);
         // Per axis, `pick` of the kept lanes, the others filled with what it ignores.
-        let reduce = |v: Vec3x8, fill: f32, pick: fn(F32x8) -> f32| {
-            let fill = F32x8::splat(fill);
+        let reduce = |v: Vec3xP, fill: f32, pick: fn(F32xP) -> f32| {
+            let fill = F32xP::splat(fill);
             Vec3::new(
                 pick(keep.select(v.x, fill)),
                 pick(keep.select(v.y, fill)),
                 pick(keep.select(v.z, fill)),
             )
         };
-        let least = |v| reduce(v, f32::INFINITY, F32x8::min_lane);
-        let most = |v| reduce(v, f32::NEG_INFINITY, F32x8::max_lane);
+        let least = |v| reduce(v, f32::INFINITY, F32xP::min_lane);
+        let most = |v| reduce(v, f32::NEG_INFINITY, F32xP::max_lane);
         RayRange::from_bounds(
             [least(self.origin), most(self.origin)],
             [least(self.inv_dir), most(self.inv_dir)],
@@ -244,12 +246,12 @@ impl BoxRay8 {
     /// traversal), every lane: the caller keeps the lanes it asks about, so that a node's
     /// children share one mask operation (a bit `and` on the answer).
     #[inline]
-    pub fn interval(&self, min: Vec3, max: Vec3, t_min: F32x8, t_max: F32x8) -> Intervals8 {
+    pub fn interval(&self, min: Vec3, max: Vec3, t_min: F32xP, t_max: F32xP) -> Intervals<F32xP> {
         let lanes = Lanes {
             origin: self.origin,
             inv_dir: self.inv_dir,
-            min: Vec3x8::splat(min),
-            max: Vec3x8::splat(max),
+            min: Vec3xP::splat(min),
+            max: Vec3xP::splat(max),
             t_min,
             t_max,
         };
@@ -260,7 +262,7 @@ impl BoxRay8 {
 /// The rays of a packet as one ray of intervals (interval arithmetic, as in Wald, Boulos
 /// and Shirley's coherent BVH traversal): on each axis the range of the lanes' origins
 /// and of their inverse directions, which must share a sign. Its box test says whether
-/// any of those lanes may enter a box, never no where [`BoxRay8::interval`] says yes for
+/// any of those lanes may enter a box, never no where [`BoxRays::interval`] says yes for
 /// one of them: on an axis where the directions are positive, every lane's entry slab
 /// distance `(min - o) * inv` is at least `(min - o_hi) * inv` (rounding is monotone),
 /// which is at least the smaller of its products with the two ends of the inverse
@@ -349,42 +351,45 @@ impl RayRange {
             entry = (a * lo).min(a * hi).max(entry);
             exit = (b * lo).max(b * hi).min(exit);
         }
-        entry.le(widen_exit8(exit)).bitmask()
+        entry.le(widen_exit_lanes(exit)).bitmask()
     }
 }
 
-/// Eight intervals: the lanes that hit, and their entries and widened exits (unspecified
-/// in the other lanes).
+/// Intervals lane by lane: the lanes that hit, and their entries and widened exits
+/// (unspecified in the other lanes).
 #[derive(Clone, Copy, Debug)]
-pub struct Intervals8 {
-    pub hit: Mask8,
-    pub entry: F32x8,
-    pub exit: F32x8,
+pub struct Intervals<F: Floats> {
+    pub hit: F::Mask,
+    pub entry: F,
+    pub exit: F,
 }
 
-impl Intervals8 {
+/// Eight intervals: a node's children, or a pack's boxes, against one ray.
+pub type Intervals8 = Intervals<F32x8>;
+
+impl<F: Floats> Intervals<F> {
     /// The rule of [`BoxRay::holds`] lane by lane: the hit `t[k]` lies in interval `k`.
     #[inline(always)]
-    fn holds(&self, t: F32x8) -> Mask8 {
-        (self.hit & t.le(self.exit)).and_not(beyond8(self.entry, t))
+    fn holds(&self, t: F) -> F::Mask {
+        (self.hit & t.le(self.exit)).and_not(beyond_lanes(self.entry, t))
     }
 }
 
 /// The operands of [`BoxRay::interval`], lane by lane.
-struct Lanes {
-    origin: Vec3x8,
-    inv_dir: Vec3x8,
-    min: Vec3x8,
-    max: Vec3x8,
-    t_min: F32x8,
-    t_max: F32x8,
+struct Lanes<F> {
+    origin: Vec3Lanes<F>,
+    inv_dir: Vec3Lanes<F>,
+    min: Vec3Lanes<F>,
+    max: Vec3Lanes<F>,
+    t_min: F,
+    t_max: F,
 }
 
-impl Lanes {
+impl<F: Floats> Lanes<F> {
     /// The body of [`BoxRay::interval`], axes in the same order, `minps`/`maxps` as
     /// `lesser`/`greater`.
     #[inline(always)]
-    fn clip(&self) -> Intervals8 {
+    fn clip(&self) -> Intervals<F> {
         let t1 = (self.min - self.origin) * self.inv_dir;
         let t2 = (self.max - self.origin) * self.inv_dir;
         let mut entry = self.t_min;
@@ -393,8 +398,8 @@ impl Lanes {
             entry = t1.min(t2).max(entry);
             exit = t1.max(t2).min(exit);
         }
-        let exit = widen_exit8(exit);
-        Intervals8 {
+        let exit = widen_exit_lanes(exit);
+        Intervals {
             hit: entry.le(exit),
             entry,
             exit,

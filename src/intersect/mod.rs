@@ -16,7 +16,7 @@
 //! versions are the reference that faster (SIMD) versions are tested against.
 //!
 //! Beside each scalar routine live its SIMD twins over [`crate::simd`]: a packet kernel
-//! (`*_packet`: eight rays of a [`crate::ray::RayPacket`] against one primitive, with an
+//! (`*_packet`: the rays of a [`crate::ray::RayPacket`] against one primitive, with an
 //! `active` mask) and, for the kinds that fill BVH leaves, a leaf kernel (`*_leaf`: one
 //! ray against a pack of eight primitives side by side, padded with inert entries). Both
 //! run one lane-wise body that repeats the scalar arithmetic operation for operation, in
@@ -37,7 +37,7 @@ pub use aabb::{aabb, aabb_leaf, aabb_normal, aabb_packet, BoxPack8, Boxes};
 pub use bounds::{trusted_box, Aabb};
 pub use cone::{cone, cone_normal, cone_packet, Cones};
 pub use interval::{
-    beyond, beyond8, widen_entry, widen_exit, BoxRay, BoxRay8, Intervals8, RayRange,
+    beyond, beyond_lanes, widen_entry, widen_exit, BoxRay, BoxRays, Intervals, Intervals8, RayRange,
 };
 pub use moving_sphere::MovingSpheres;
 pub use plane::{plane, plane_packet, Planes};
@@ -46,14 +46,17 @@ pub use sphere::{
     MIN_RADIUS,
 };
 pub use triangle::{
-    triangle, triangle_leaf, triangle_packet, Triangle, TriangleHit, TriangleHit8, TrianglePack8,
-    Triangles,
+    triangle, triangle_leaf, triangle_packet, Triangle, TriangleHit, TriangleHit8, TriangleHits,
+    TrianglePack8, Triangles,
 };
+
+/// A packet's lanes of [`TriangleHit`], as its kernels give them.
+pub type PacketHits = TriangleHits<F32xP>;
 
 use glam::Vec3;
 
 use crate::ray::{Ray, RayPacket};
-use crate::simd::{F32x8, Mask8, Vec3x8};
+use crate::simd::{F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3x8, PACKET};
 
 /// The storage of one primitive kind, and what the layers above ask of a primitive `i`
 /// of it. Implemented in the kind's own file; [`crate::scene::Geometry`] dispatches to it.
@@ -84,13 +87,20 @@ pub trait Shapes {
     /// `(packet.t_min, t_max)` lane by lane (the packet's own bounds, or tighter ones a
     /// traversal keeps), each lane bit for bit the scalar answer; the other lanes miss.
     /// By default lane by lane; a kind with a packet kernel (`*_packet`) calls it.
-    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
+    fn intersect_packet(
+        &self,
+        i: usize,
+        query: &PacketQuery,
+        t_max: F32xP,
+        active: LaneBits,
+    ) -> PacketHits {
         let t_max = t_max.to_array();
-        TriangleHit8::from_lanes(std::array::from_fn(|k| {
+        let hits: [Option<TriangleHit>; PACKET] = std::array::from_fn(|k| {
             (active & (1 << k) != 0)
                 .then(|| self.intersect(i, &query.lane(k), t_max[k]))
                 .flatten()
-        }))
+        });
+        PacketHits::from_fn(|k| hits[k])
     }
 
     /// The outward unit normal at the hit point `p` (barycentrics `u`, `v` for
@@ -145,14 +155,14 @@ pub trait LeafPack: Shapes {
     fn leaf(pack: &Self::Pack, query: &RayQuery, t_max: f32) -> TriangleHit8;
 
     /// The primitive in slot `slot` of `pack` against the lanes `active` of `query`'s
-    /// packet, as [`Shapes::intersect8`] tests a primitive of the storage.
-    fn slot8(
+    /// packet, as [`Shapes::intersect_packet`] tests a primitive of the storage.
+    fn slot_packet(
         pack: &Self::Pack,
         slot: usize,
-        query: &RayQuery8,
-        t_max: F32x8,
-        active: u8,
-    ) -> TriangleHit8;
+        query: &PacketQuery,
+        t_max: F32xP,
+        active: LaneBits,
+    ) -> PacketHits;
 }
 
 /// One ray as a query's primitive tests take it, with what stays the same for all of
@@ -193,15 +203,15 @@ impl RayQuery {
     }
 }
 
-/// [`RayQuery`] for eight rays: a packet (its lanes' `1 / dir`, the start of their
+/// [`RayQuery`] for a packet's rays: a packet (its lanes' `1 / dir`, the start of their
 /// interval) and what the profile chose.
 #[derive(Clone, Copy, Debug)]
-pub struct RayQuery8<'p> {
+pub struct PacketQuery<'p> {
     pub packet: &'p RayPacket<'p>,
     pub options: IntersectOptions,
 }
 
-impl RayQuery8<'_> {
+impl PacketQuery<'_> {
     /// Lane `k`'s ray as a query of its own: the same `1 / dir`, bit for bit, as
     /// [`RayQuery::new`] makes.
     #[inline]
@@ -216,16 +226,16 @@ impl RayQuery8<'_> {
 
     /// [`RayQuery::holds`] for each lane, lane `k` with the hit `t[k]`.
     #[inline]
-    pub fn holds(&self, bounds: Option<Aabb>, t: F32x8) -> Mask8 {
-        bounds.map_or(Mask8::from_bitmask(0), |b| {
-            BoxRay8::new(self.packet).holds(b.min, b.max, self.t_min8(), t)
+    pub fn holds(&self, bounds: Option<Aabb>, t: F32xP) -> MaskP {
+        bounds.map_or(MaskP::from_bitmask(0), |b| {
+            BoxRays::new(self.packet).holds(b.min, b.max, self.t_min_lanes(), t)
         })
     }
 
     /// The start of every lane's interval, as the packet kernels take it.
     #[inline]
-    pub fn t_min8(&self) -> F32x8 {
-        F32x8::splat(self.packet.t_min)
+    pub fn t_min_lanes(&self) -> F32xP {
+        F32xP::splat(self.packet.t_min)
     }
 }
 
@@ -367,7 +377,7 @@ fn first_root_in(near: f32, far: f32, t_min: f32, t_max: f32) -> Option<f32> {
 
 /// [`first_root_in`] lane by lane: the hit mask and the chosen root.
 #[inline(always)]
-fn first_root_in8(near: F32x8, far: F32x8, t_min: F32x8, t_max: F32x8) -> (Mask8, F32x8) {
+fn first_root_in_lanes<F: Floats>(near: F, far: F, t_min: F, t_max: F) -> (F::Mask, F) {
     let near_in = near.gt(t_min) & near.lt(t_max);
     let far_in = far.gt(t_min) & far.lt(t_max);
     (near_in | far_in, near_in.select(near, far))

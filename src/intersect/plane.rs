@@ -4,10 +4,10 @@
 use glam::Vec3;
 
 use super::{
-    gamma, Aabb, RayQuery, RayQuery8, Shapes, SurfacePoint, TriangleHit, TriangleHit8, Vec3s,
+    gamma, Aabb, PacketHits, PacketQuery, RayQuery, Shapes, SurfacePoint, TriangleHit, Vec3s,
 };
 use crate::ray::{Ray, RayPacket};
-use crate::simd::{F32x8, Mask8, Vec3x8};
+use crate::simd::{F32xP, LaneBits, MaskP, Vec3xP};
 
 /// Ray-plane test for the plane `dot(normal, p) = offset`. A ray parallel to the plane
 /// (including one lying in it) misses.
@@ -20,22 +20,22 @@ pub fn plane(ray: &Ray, normal: Vec3, offset: f32, t_min: f32, t_max: f32) -> Op
     (t > t_min && t < t_max).then_some(t)
 }
 
-/// [`plane`] for eight rays; lanes outside `active` miss. Planes never enter a BVH leaf,
+/// [`plane`] for a packet's rays; lanes outside `active` miss. Planes never enter a BVH leaf,
 /// so there is no leaf kernel.
 pub fn plane_packet(
     rays: &RayPacket,
     normal: Vec3,
     offset: f32,
-    t_min: F32x8,
-    t_max: F32x8,
-    active: u8,
-) -> (Mask8, F32x8) {
-    let normal = Vec3x8::splat(normal);
+    t_min: F32xP,
+    t_max: F32xP,
+    active: LaneBits,
+) -> (MaskP, F32xP) {
+    let normal = Vec3xP::splat(normal);
     let denom = normal.dot(rays.dir);
-    let t = (F32x8::splat(offset) - normal.dot(rays.origin)) / denom;
+    let t = (F32xP::splat(offset) - normal.dot(rays.origin)) / denom;
     let hit = t.gt(t_min) & t.lt(t_max);
-    let active = Mask8::from_bitmask(active);
-    (active.and_not(denom.eq(F32x8::ZERO)) & hit, t)
+    let active = MaskP::from_bitmask(active);
+    (active.and_not(denom.eq(F32xP::ZERO)) & hit, t)
 }
 
 /// Infinite planes `dot(normal, p) = offset`.
@@ -68,13 +68,19 @@ impl Shapes for Planes {
         plane(&query.ray, normal, offset, query.t_min, t_max).map(TriangleHit::at)
     }
 
-    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
+    fn intersect_packet(
+        &self,
+        i: usize,
+        query: &PacketQuery,
+        t_max: F32xP,
+        active: LaneBits,
+    ) -> PacketHits {
         let (normal, offset) = (self.normal.get(i), self.offset[i]);
-        TriangleHit8::at(plane_packet(
+        PacketHits::at(plane_packet(
             query.packet,
             normal,
             offset,
-            query.t_min8(),
+            query.t_min_lanes(),
             t_max,
             active,
         ))

@@ -1,17 +1,20 @@
 //! The sphere kind: its storage ([`Spheres`]), the ray-sphere test and its SIMD twins
-//! (eight rays against one sphere; one ray against a [`SpherePack8`] of a BVH leaf), each
+//! (a packet's rays against one sphere; one ray against a [`SpherePack8`] of a BVH leaf), each
 //! in two forms of the quadratic ([`SphereRoots`]).
 
 use glam::Vec3;
 
-use super::{first_root_in, first_root_in8};
+use super::{first_root_in, first_root_in_lanes};
 use super::{
-    gamma, trusted_box, Aabb, BoxPack8, Hits8, IntersectOptions, LeafPack, RayQuery, RayQuery8,
-    Shapes, SurfacePoint, SurfacePoint8, TriangleHit, TriangleHit8,
+    gamma, trusted_box, Aabb, BoxPack8, Hits8, IntersectOptions, LeafPack, PacketHits, PacketQuery,
+    RayQuery, Shapes, SurfacePoint, SurfacePoint8, TriangleHit, TriangleHit8,
 };
 
 use crate::ray::{Ray, RayPacket};
-use crate::simd::{for_lanes, prefetch, F32x8, Mask8, Vec3x8};
+use crate::simd::{
+    for_lanes, prefetch, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3Lanes, Vec3x8,
+    Vec3xP,
+};
 
 /// How the sphere test solves its quadratic.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -111,27 +114,27 @@ impl SpherePack8 {
     }
 }
 
-/// [`sphere`], or [`sphere_textbook`] as `roots` says, for eight rays against one
+/// [`sphere`], or [`sphere_textbook`] as `roots` says, for a packet's rays against one
 /// sphere; lanes outside `active` miss.
 pub fn sphere_packet(
     rays: &RayPacket,
     centre: Vec3,
     radius: f32,
     roots: SphereRoots,
-    t_min: F32x8,
-    t_max: F32x8,
-    active: u8,
-) -> (Mask8, F32x8) {
-    let (centre, radius) = (Vec3x8::splat(centre), F32x8::splat(radius));
+    t_min: F32xP,
+    t_max: F32xP,
+    active: LaneBits,
+) -> (MaskP, F32xP) {
+    let (centre, radius) = (Vec3xP::splat(centre), F32xP::splat(radius));
     let (hit, t) = match roots {
         SphereRoots::Precise => {
-            sphere_lanes::<false>(rays.origin, rays.dir, centre, radius, t_min, t_max)
+            sphere_lanes::<_, false>(rays.origin, rays.dir, centre, radius, t_min, t_max)
         }
         SphereRoots::Textbook => {
-            sphere_lanes::<true>(rays.origin, rays.dir, centre, radius, t_min, t_max)
+            sphere_lanes::<_, true>(rays.origin, rays.dir, centre, radius, t_min, t_max)
         }
     };
-    (hit & Mask8::from_bitmask(active), t)
+    (hit & MaskP::from_bitmask(active), t)
 }
 
 /// [`sphere`], or [`sphere_textbook`] as `roots` says, for one ray against the eight
@@ -149,10 +152,10 @@ pub fn sphere_leaf(
     let (t_min, t_max) = (F32x8::splat(t_min), F32x8::splat(t_max));
     match roots {
         SphereRoots::Precise => {
-            sphere_lanes::<false>(origin, dir, pack.centre, pack.radius, t_min, t_max)
+            sphere_lanes::<_, false>(origin, dir, pack.centre, pack.radius, t_min, t_max)
         }
         SphereRoots::Textbook => {
-            sphere_lanes::<true>(origin, dir, pack.centre, pack.radius, t_min, t_max)
+            sphere_lanes::<_, true>(origin, dir, pack.centre, pack.radius, t_min, t_max)
         }
     }
 }
@@ -160,15 +163,15 @@ pub fn sphere_leaf(
 /// The body of [`sphere`] (or, with `TEXTBOOK`, of [`sphere_textbook`]), lane by lane:
 /// both branches are computed and the early exits become masks.
 #[inline(always)]
-fn sphere_lanes<const TEXTBOOK: bool>(
-    origin: Vec3x8,
-    dir: Vec3x8,
-    centre: Vec3x8,
-    radius: F32x8,
-    t_min: F32x8,
-    t_max: F32x8,
-) -> (Mask8, F32x8) {
-    let zero = F32x8::ZERO;
+fn sphere_lanes<F: Floats, const TEXTBOOK: bool>(
+    origin: Vec3Lanes<F>,
+    dir: Vec3Lanes<F>,
+    centre: Vec3Lanes<F>,
+    radius: F,
+    t_min: F,
+    t_max: F,
+) -> (F::Mask, F) {
+    let zero = F::splat(0.0);
     let oc = centre - origin;
     let b = oc.dot(dir);
     let c = oc.dot(oc) - radius * radius;
@@ -185,8 +188,8 @@ fn sphere_lanes<const TEXTBOOK: bool>(
         let ordered = r0.le(r1);
         (disc, ordered.select(r0, r1), ordered.select(r1, r0))
     };
-    let real = (disc.ge(zero) & radius.ge(F32x8::splat(MIN_RADIUS))).and_not(behind);
-    let (hit, t) = first_root_in8(near, far, t_min, t_max);
+    let real = (disc.ge(zero) & radius.ge(F::splat(MIN_RADIUS))).and_not(behind);
+    let (hit, t) = first_root_in_lanes(near, far, t_min, t_max);
     (hit & real, t)
 }
 
@@ -246,29 +249,39 @@ impl LeafPack for Spheres {
     }
 
     #[inline(always)]
-    fn slot8(
+    fn slot_packet(
         pack: &SpherePack8,
         slot: usize,
-        query: &RayQuery8,
-        t_max: F32x8,
-        active: u8,
-    ) -> TriangleHit8 {
+        query: &PacketQuery,
+        t_max: F32xP,
+        active: LaneBits,
+    ) -> PacketHits {
         let (centre, radius) = (pack.centre.lane(slot), pack.radius.to_array()[slot]);
-        sphere8(query, centre, radius, t_max, active)
+        sphere_in_packet(query, centre, radius, t_max, active)
     }
 }
 
 /// [`sphere_packet`] for the lanes `active` of `query`'s packet, in the form of the
 /// storage's and the pack's packet tests, with the form of the roots the query chose.
 #[inline(always)]
-fn sphere8(query: &RayQuery8, centre: Vec3, radius: f32, t_max: F32x8, active: u8) -> TriangleHit8 {
-    let (rays, roots, t_min) = (query.packet, query.options.sphere_roots, query.t_min8());
+fn sphere_in_packet(
+    query: &PacketQuery,
+    centre: Vec3,
+    radius: f32,
+    t_max: F32xP,
+    active: LaneBits,
+) -> PacketHits {
+    let (rays, roots, t_min) = (
+        query.packet,
+        query.options.sphere_roots,
+        query.t_min_lanes(),
+    );
     let (hit, t) = sphere_packet(rays, centre, radius, roots, t_min, t_max, active);
     if hit.none() {
-        return TriangleHit8::at((hit, t));
+        return PacketHits::at((hit, t));
     }
     let trusted = trusted_sphere_box(centre, radius, query.options);
-    TriangleHit8::at((hit & query.holds(trusted, t), t))
+    PacketHits::at((hit & query.holds(trusted, t), t))
 }
 
 /// The box the structures hold a sphere in ([`trusted_box`], with the margin of the
@@ -352,9 +365,15 @@ impl Shapes for Spheres {
         .map(TriangleHit::at)
     }
 
-    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
+    fn intersect_packet(
+        &self,
+        i: usize,
+        query: &PacketQuery,
+        t_max: F32xP,
+        active: LaneBits,
+    ) -> PacketHits {
         let Sphere { centre, radius, .. } = self.records[i];
-        sphere8(query, centre, radius, t_max, active)
+        sphere_in_packet(query, centre, radius, t_max, active)
     }
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, _time: f32) -> Vec3 {

@@ -1,5 +1,5 @@
 //! The triangle kind: its storage ([`Triangles`]: a vertex and two edges, optional vertex
-//! normals), Möller-Trumbore and its SIMD twins (eight rays against one triangle; one ray
+//! normals), Möller-Trumbore and its SIMD twins (a packet's rays against one triangle; one ray
 //! against a [`TrianglePack8`] of a BVH leaf).
 //!
 //! **Precision.** A hit stands only inside the triangle's trusted box (the box the
@@ -25,11 +25,14 @@
 use glam::Vec3;
 
 use super::{
-    gamma, trusted_box, Aabb, BoxPack8, BoxRay8, Hits8, IntersectOptions, LeafPack, RayQuery,
-    RayQuery8, Shapes, SurfacePoint, SurfacePoint8,
+    gamma, trusted_box, Aabb, BoxPack8, BoxRays, Hits8, IntersectOptions, LeafPack, PacketHits,
+    PacketQuery, RayQuery, Shapes, SurfacePoint, SurfacePoint8,
 };
 use crate::ray::{Ray, RayPacket};
-use crate::simd::{for_lanes, prefetch, F32x8, Mask8, Vec3x8};
+use crate::simd::{
+    for_lanes, prefetch, Bits, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3Lanes,
+    Vec3x8, Vec3xP,
+};
 
 /// Distance and barycentric coordinates of a ray-triangle hit: the point is
 /// `(1 - u - v) p0 + u p1 + v p2`.
@@ -155,16 +158,16 @@ fn refined(ray: &Ray, p0: Vec3, e1: Vec3, e2: Vec3, t_min: f32, t_max: f32) -> O
 /// others computed again by [`refined`], lane `k` against the ray and the triangle that
 /// `lane(k)` gives.
 #[inline(always)]
-fn settle(
-    hits: &mut TriangleHit8,
-    trusted: Mask8,
+fn settle<F: Floats>(
+    hits: &mut TriangleHits<F>,
+    trusted: F::Mask,
     lane: impl Fn(usize) -> (Ray, [Vec3; 3]),
-    t_min: F32x8,
-    t_max: F32x8,
+    t_min: F,
+    t_max: F,
 ) {
     let doubtful = hits.hit.and_not(trusted).bitmask();
     hits.hit = hits.hit & trusted & hits.t.lt(t_max);
-    if doubtful != 0 {
+    if doubtful != Bits::EMPTY {
         refine_lanes(hits, doubtful, lane, t_min, t_max);
     }
 }
@@ -172,67 +175,70 @@ fn settle(
 /// The lanes `doubtful` of `hits` as [`triangle`] computes them again.
 #[cold]
 #[inline(never)]
-fn refine_lanes(
-    hits: &mut TriangleHit8,
-    doubtful: u8,
+fn refine_lanes<F: Floats>(
+    hits: &mut TriangleHits<F>,
+    doubtful: <F::Mask as LaneMask>::Bits,
     lane: impl Fn(usize) -> (Ray, [Vec3; 3]),
-    t_min: F32x8,
-    t_max: F32x8,
+    t_min: F,
+    t_max: F,
 ) {
     let mut mask = hits.hit.bitmask();
-    let (mut t, mut u, mut v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
-    let (t_min, t_max) = (t_min.to_array(), t_max.to_array());
     for_lanes(doubtful, |k| {
         let (ray, triangle) = lane(k);
         let [p0, e1, e2] = triangle;
-        let hit = refined(&ray, p0, e1, e2, t_min[k], t_max[k]).filter(|hit| {
-            let query = RayQuery::new(&ray, t_min[k], IntersectOptions::default());
+        let (t_min, t_max) = (t_min.lane(k), t_max.lane(k));
+        let hit = refined(&ray, p0, e1, e2, t_min, t_max).filter(|hit| {
+            let query = RayQuery::new(&ray, t_min, IntersectOptions::default());
             in_trusted_box(&query, triangle, hit.t)
         });
         if let Some(hit) = hit {
-            (t[k], u[k], v[k]) = (hit.t, hit.u, hit.v);
-            mask |= 1 << k;
+            hits.t.set_lane(k, hit.t);
+            hits.u.set_lane(k, hit.u);
+            hits.v.set_lane(k, hit.v);
+            mask = mask.with(k);
         }
     });
-    *hits = TriangleHit8 {
-        hit: Mask8::from_bitmask(mask),
-        t: F32x8::from_array(t),
-        u: F32x8::from_array(u),
-        v: F32x8::from_array(v),
-    };
+    hits.hit = F::Mask::from_bitmask(mask);
 }
 
-/// Eight lanes of [`TriangleHit`]: lane `i` hit when `hit` has it; `t`, `u` and `v` of a
-/// lane that misses are unspecified.
+/// Lanes of [`TriangleHit`]: lane `i` hit when `hit` has it; `t`, `u` and `v` of a lane
+/// that misses are unspecified.
 #[derive(Clone, Copy, Debug)]
-pub struct TriangleHit8 {
-    pub hit: Mask8,
-    pub t: F32x8,
-    pub u: F32x8,
-    pub v: F32x8,
+pub struct TriangleHits<F: Floats> {
+    pub hit: F::Mask,
+    pub t: F,
+    pub u: F,
+    pub v: F,
 }
 
-impl TriangleHit8 {
+/// Eight lanes of [`TriangleHit`].
+pub type TriangleHit8 = TriangleHits<F32x8>;
+
+impl<F: Floats> TriangleHits<F> {
     /// Hits at `t` with no barycentrics: the hits of the other kinds.
-    pub fn at((hit, t): (Mask8, F32x8)) -> Self {
-        TriangleHit8 {
+    pub fn at((hit, t): (F::Mask, F)) -> Self {
+        TriangleHits {
             hit,
             t,
-            u: F32x8::ZERO,
-            v: F32x8::ZERO,
+            u: F::splat(0.0),
+            v: F::splat(0.0),
         }
     }
 
-    /// The hit of each lane (a miss's lanes zero).
-    pub fn from_lanes(hits: [Option<TriangleHit>; 8]) -> Self {
-        let lane = |field: fn(&TriangleHit) -> f32| {
-            F32x8::from_array(hits.map(|h| h.as_ref().map_or(0.0, field)))
-        };
-        TriangleHit8 {
-            hit: Mask8::from_bitmask(crate::ray::lane_mask(|k| hits[k].is_some())),
-            t: lane(|h| h.t),
-            u: lane(|h| h.u),
-            v: lane(|h| h.v),
+    /// The hit of each lane `k`, `lane(k)` (a miss's lanes zero).
+    pub fn from_fn(lane: impl Fn(usize) -> Option<TriangleHit>) -> Self {
+        let field = |f: fn(&TriangleHit) -> f32| F::from_fn(|k| lane(k).as_ref().map_or(0.0, f));
+        let mut hit = <F::Mask as LaneMask>::Bits::EMPTY;
+        for k in 0..F::LANES {
+            if lane(k).is_some() {
+                hit = hit.with(k);
+            }
+        }
+        TriangleHits {
+            hit: F::Mask::from_bitmask(hit),
+            t: field(|h| h.t),
+            u: field(|h| h.u),
+            v: field(|h| h.v),
         }
     }
 }
@@ -292,16 +298,16 @@ impl TrianglePack8 {
     }
 }
 
-/// [`triangle`] for eight rays against one triangle; lanes outside `active` miss.
+/// [`triangle`] for a packet's rays against one triangle; lanes outside `active` miss.
 pub fn triangle_packet(
     rays: &RayPacket,
     p0: Vec3,
     e1: Vec3,
     e2: Vec3,
-    t_min: F32x8,
-    t_max: F32x8,
-    active: u8,
-) -> TriangleHit8 {
+    t_min: F32xP,
+    t_max: F32xP,
+    active: LaneBits,
+) -> PacketHits {
     let triangle = [p0, e1, e2];
     packet_hits(
         rays,
@@ -320,22 +326,22 @@ fn packet_hits(
     rays: &RayPacket,
     [p0, e1, e2]: [Vec3; 3],
     trusted: impl Fn() -> Option<Aabb>,
-    t_min: F32x8,
-    t_max: F32x8,
-    active: u8,
-) -> TriangleHit8 {
+    t_min: F32xP,
+    t_max: F32xP,
+    active: LaneBits,
+) -> PacketHits {
     let mut hits = triangle_lanes(
         rays.origin,
         rays.dir,
-        Vec3x8::splat(p0),
-        Vec3x8::splat(e1),
-        Vec3x8::splat(e2),
+        Vec3xP::splat(p0),
+        Vec3xP::splat(e1),
+        Vec3xP::splat(e2),
         t_min,
     );
-    hits.hit = hits.hit & Mask8::from_bitmask(active);
+    hits.hit = hits.hit & MaskP::from_bitmask(active);
     if hits.hit.any() {
-        let trusted = trusted().map_or(Mask8::from_bitmask(0), |b| {
-            BoxRay8::new(rays).holds(b.min, b.max, t_min, hits.t)
+        let trusted = trusted().map_or(MaskP::from_bitmask(0), |b| {
+            BoxRays::new(rays).holds(b.min, b.max, t_min, hits.t)
         });
         settle(
             &mut hits,
@@ -381,15 +387,15 @@ fn leaf_hits(query: &RayQuery, pack: &TrianglePack8, t_max: f32) -> TriangleHit8
 /// The single-precision body of [`triangle`], lane by lane, its early exits turned into
 /// a mask: the candidates that [`settle`] settles.
 #[inline(always)]
-fn triangle_lanes(
-    origin: Vec3x8,
-    dir: Vec3x8,
-    p0: Vec3x8,
-    e1: Vec3x8,
-    e2: Vec3x8,
-    t_min: F32x8,
-) -> TriangleHit8 {
-    let (zero, one) = (F32x8::ZERO, F32x8::splat(1.0));
+fn triangle_lanes<F: Floats>(
+    origin: Vec3Lanes<F>,
+    dir: Vec3Lanes<F>,
+    p0: Vec3Lanes<F>,
+    e1: Vec3Lanes<F>,
+    e2: Vec3Lanes<F>,
+    t_min: F,
+) -> TriangleHits<F> {
+    let (zero, one) = (F::splat(0.0), F::splat(1.0));
     let p = dir.cross(e2);
     let det = e1.dot(p);
     let mut hit = det.is_finite().and_not(det.eq(zero));
@@ -402,7 +408,7 @@ fn triangle_lanes(
     hit = hit & v.ge(zero) & (u + v).le(one);
     let t = e2.dot(q) * inv_det;
     hit = hit & t.gt(t_min);
-    TriangleHit8 { hit, t, u, v }
+    TriangleHits { hit, t, u, v }
 }
 
 /// Triangles stored as a vertex and two edges (what Möller-Trumbore reads), one
@@ -503,20 +509,20 @@ impl LeafPack for Triangles {
     }
 
     #[inline(always)]
-    fn slot8(
+    fn slot_packet(
         pack: &TrianglePack8,
         slot: usize,
-        query: &RayQuery8,
-        t_max: F32x8,
-        active: u8,
-    ) -> TriangleHit8 {
+        query: &PacketQuery,
+        t_max: F32xP,
+        active: LaneBits,
+    ) -> PacketHits {
         let triangle = [pack.p0.lane(slot), pack.e1.lane(slot), pack.e2.lane(slot)];
         let trusted = || pack.trusted_box(slot);
         packet_hits(
             query.packet,
             triangle,
             trusted,
-            query.t_min8(),
+            query.t_min_lanes(),
             t_max,
             active,
         )
@@ -553,9 +559,15 @@ impl Shapes for Triangles {
         )
     }
 
-    fn intersect8(&self, i: usize, query: &RayQuery8, t_max: F32x8, active: u8) -> TriangleHit8 {
+    fn intersect_packet(
+        &self,
+        i: usize,
+        query: &PacketQuery,
+        t_max: F32xP,
+        active: LaneBits,
+    ) -> PacketHits {
         let [p0, e1, e2] = self.records[i].vertex_and_edges();
-        triangle_packet(query.packet, p0, e1, e2, query.t_min8(), t_max, active)
+        triangle_packet(query.packet, p0, e1, e2, query.t_min_lanes(), t_max, active)
     }
 
     /// The geometric normal of P3F.md section 2 (triangles have no inside), or for smooth

@@ -14,6 +14,7 @@ use super::film::{Film, OutputFormat, Placement};
 use super::shade::CostRays;
 use super::{RenderMode, RenderWork};
 use crate::accel::count::Counter;
+use crate::simd::PACKET;
 
 /// What a cost image shows: one counter, over the rays `rays` says.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -27,16 +28,20 @@ const NOTE_KEY: &str = "cost: ";
 
 impl CostMap {
     /// The line of the note of a cost image made with the structure `structure` in ray
-    /// mode `mode`, which change its counts (not its colours): `cost: prims per pixel,
-    /// all rays (bvh sah, stream mode)`.
+    /// mode `mode` and, for packets, the build's packet width, which change its counts
+    /// (not its colours): `cost: prims per pixel, all rays (bvh sah, stream mode, packets
+    /// of 8)`.
     pub fn note_line(&self, structure: &str, mode: RenderMode) -> String {
         let rays = match self.rays {
             CostRays::All => "all rays",
             CostRays::Primary => "primary rays",
         };
-        let mode = format!("{mode:?}").to_lowercase();
+        let mode = match mode {
+            RenderMode::Scalar => "scalar mode".to_string(),
+            RenderMode::Stream => format!("stream mode, packets of {PACKET}"),
+        };
         format!(
-            "{NOTE_KEY}{} per pixel, {rays} ({structure}, {mode} mode)",
+            "{NOTE_KEY}{} per pixel, {rays} ({structure}, {mode})",
             self.counter.name()
         )
     }

@@ -36,6 +36,7 @@ use crate::accel::{AccelKind, AccelOptions, Tracer};
 use crate::intersect::IntersectOptions;
 use crate::limits::{check_image_size, MAX_SPP_SIDE};
 use crate::scene::Scene;
+use crate::simd::PACKET;
 use camera::{Camera, FilmSample};
 use film::Film;
 use progress::{Meter, Progress};
@@ -99,7 +100,7 @@ pub enum RenderMode {
     /// One ray at a time: the reference path.
     Scalar,
     /// A tile's rays breadth first, depth by depth, every depth's rays and shadow rays
-    /// as packets of eight (`stream`). The image is the scalar one, byte for byte.
+    /// as packets (`stream`). The image is the scalar one, byte for byte.
     Stream,
 }
 
@@ -439,9 +440,9 @@ thread_local! {
 }
 
 /// The stream queues a tile's primary samples by blocks of this many pixels across and
-/// up, the pixels of its packets of eight.
+/// up, the pixels of its packets: 4 x 2 for packets of eight rays, 4 x 4 for sixteen.
 const PACKET_WIDTH: u32 = 4;
-const PACKET_HEIGHT: u32 = 2;
+const PACKET_HEIGHT: u32 = (PACKET / 4) as u32;
 
 /// Writes the pixels of one tile into `pixels` and their rays' work into `work`, row by
 /// row from its bottom row, and returns the rays they took.

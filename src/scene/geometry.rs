@@ -6,12 +6,12 @@
 use glam::Vec3;
 
 use crate::intersect::{
-    Aabb, Hits8, RayQuery, RayQuery8, Shapes, SurfacePoint, SurfacePoint8, TriangleHit,
-    TriangleHit8,
+    Aabb, Hits8, PacketHits, PacketQuery, RayQuery, Shapes, SurfacePoint, SurfacePoint8,
+    TriangleHit,
 };
 use crate::prim::{prim_kinds, PrimId, PrimKind};
 use crate::ray::Ray;
-use crate::simd::F32x8;
+use crate::simd::{F32xP, LaneBits};
 
 macro_rules! define_geometry {
     ($($kind:ident, $field:ident, $storage:ident, $name:literal, $bound:ident, $pack:ident;)*) => {
@@ -63,16 +63,16 @@ macro_rules! define_geometry {
             /// [`Geometry::intersect`] for the lanes `active` of `query`'s packet, each
             /// within `(packet.t_min, t_max)` lane by lane, by the kind's packet kernel:
             /// each lane's answer is bit for bit the scalar one.
-            pub fn intersect8(
+            pub fn intersect_packet(
                 &self,
                 prim: PrimId,
-                query: &RayQuery8,
-                t_max: F32x8,
-                active: u8,
-            ) -> TriangleHit8 {
+                query: &PacketQuery,
+                t_max: F32xP,
+                active: LaneBits,
+            ) -> PacketHits {
                 let i = prim.index();
                 match prim.kind() {
-                    $(PrimKind::$kind => self.$field.intersect8(i, query, t_max, active),)*
+                    $(PrimKind::$kind => self.$field.intersect_packet(i, query, t_max, active),)*
                 }
             }
 

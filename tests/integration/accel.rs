@@ -15,6 +15,7 @@ use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::{render, RenderOptions};
 use p3trace::scene::p3f::parse_text;
 use p3trace::scene::{parse_file, Scene};
+use p3trace::simd::{Bits, LaneBits, PACKET};
 use proptest::prelude::*;
 
 /// Every structure and option the renderer can run, but brute force.
@@ -196,10 +197,10 @@ fn ray() -> impl Strategy<Value = (Ray, f32)> {
         })
 }
 
-/// Eight rays for a packet: from one origin (coherent, as primary and shadow rays are) or
+/// A packet's rays: from one origin (coherent, as primary and shadow rays are) or
 /// from scattered ones, with now and then a lane whose direction is zero, infinite or NaN,
 /// an active mask, and per-lane distances.
-fn packet() -> impl Strategy<Value = ([Ray; 8], u8, [f32; 8])> {
+fn packet() -> impl Strategy<Value = ([Ray; PACKET], LaneBits, [f32; PACKET])> {
     let odd_direction = prop_oneof![
         Just(Vec3::ZERO),
         Just(Vec3::new(f32::NAN, 0.0, 1.0)),
@@ -209,18 +210,9 @@ fn packet() -> impl Strategy<Value = ([Ray; 8], u8, [f32; 8])> {
     (
         point(),
         prop::bool::ANY,
-        [ray(), ray(), ray(), ray(), ray(), ray(), ray(), ray()],
-        [
-            lane_direction.clone(),
-            lane_direction.clone(),
-            lane_direction.clone(),
-            lane_direction.clone(),
-            lane_direction.clone(),
-            lane_direction.clone(),
-            lane_direction.clone(),
-            lane_direction,
-        ],
-        any::<u8>(),
+        prop::array::uniform(ray()),
+        prop::array::uniform::<_, PACKET>(lane_direction),
+        any::<LaneBits>(),
     )
         .prop_map(|(origin, coherent, scattered, dirs, active)| {
             let t_max = scattered.map(|(_, t)| t);
@@ -275,13 +267,13 @@ proptest! {
                 let mut counts = LaneTallies::default();
                 prop_assert_eq!(tracer.closest_packet_counting::<Tally>(&packet, &mut counts), hits);
                 prop_assert_eq!(tracer.occluded_packet_counting::<Tally>(&packet, &mut counts), blocked);
-                for k in 0..8 {
-                    let on = active & (1 << k) != 0;
+                for k in 0..PACKET {
+                    let on = active.has(k);
                     let expected = if on { brute.closest(&rays[k], 0.0, t_max[k]) } else { None };
                     prop_assert_eq!(hits[k], expected, "{} lane {} closest, {:?}", name, k, rays[k]);
                     let expected = on && brute.occluded(&rays[k], 0.0, t_max[k]);
                     prop_assert_eq!(
-                        blocked & (1 << k) != 0, expected,
+                        blocked.has(k), expected,
                         "{} lane {} occluded, {:?} t_max {}", name, k, rays[k], t_max[k]
                     );
                 }
@@ -425,11 +417,11 @@ proptest! {
     #[test]
     fn rays_from_far_away_answer_as_brute_force(
         scene in scene_of(true),
-        rays in prop::collection::vec(far_ray(), 8..=8),
+        rays in prop::collection::vec(far_ray(), PACKET..=PACKET),
     ) {
         let g = &scene.geometry;
         let brute = Tracer::new(g, &AccelOptions::brute_force());
-        let lanes: [Ray; 8] = std::array::from_fn(|k| rays[k].0);
+        let lanes: [Ray; PACKET] = std::array::from_fn(|k| rays[k].0);
         let t_max = std::array::from_fn(|k| rays[k].1);
         let packet = RayPacket::new(&lanes).with_t_max(t_max);
         for options in structures() {
@@ -443,7 +435,7 @@ proptest! {
                 prop_assert_eq!(hits[k], expected, "{} lane {} closest, {:?}", name, k, ray);
                 let expected = brute.occluded(ray, 0.0, t_max[k]);
                 prop_assert_eq!(tracer.occluded(ray, 0.0, t_max[k]), expected, "{} occluded, {:?} t_max {}", name, ray, t_max[k]);
-                prop_assert_eq!(blocked & (1 << k) != 0, expected, "{} lane {} occluded, {:?}", name, k, ray);
+                prop_assert_eq!(blocked.has(k), expected, "{} lane {} occluded, {:?}", name, k, ray);
             }
         }
     }
@@ -487,7 +479,7 @@ fn the_tracers_sphere_roots_reach_every_kernel() {
             let name = tracer.name();
             let hit = tracer.closest(&ray, 0.0, f32::INFINITY).map(|h| h.t);
             assert_eq!(hit, expected, "{name}, {roots:?}");
-            let hits = tracer.closest_packet(&RayPacket::new(&[ray; 8]));
+            let hits = tracer.closest_packet(&RayPacket::new(&[ray; PACKET]));
             assert!(
                 hits.iter().all(|h| h.map(|h| h.t) == expected),
                 "{name}, {roots:?}"

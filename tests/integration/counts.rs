@@ -11,6 +11,7 @@ use p3trace::accel::{AccelKind, AccelOptions, BvhBuild, BvhWidth, Tracer};
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::scene::p3f::parse_text;
 use p3trace::scene::Scene;
+use p3trace::simd::PACKET;
 
 const MATERIAL: &str = "f 1 1 1 1 1 1 1 0 10 0 1\n";
 
@@ -151,7 +152,7 @@ fn a_packet_of_one_ray_counts_what_the_ray_does_alone() {
         bvh(BvhBuild::Sah, BvhWidth::Two),
         bvh(BvhBuild::Midpoint, BvhWidth::Two),
     ];
-    let rays: [Ray; 8] = std::array::from_fn(|k| {
+    let rays: [Ray; PACKET] = std::array::from_fn(|k| {
         let target = Vec3::new(k as f32 * 1.3, 5.0 + (k % 3) as f32, 4.0 + (k % 2) as f32);
         let origin = Vec3::new(5.0, 5.0, -20.0);
         Ray::new(origin, (target - origin).normalize())
@@ -171,12 +172,12 @@ fn a_packet_of_one_ray_counts_what_the_ray_does_alone() {
             let t_max = 30.0;
             let mut alone = Tally::default();
             tracer.occluded_counting(ray, 0.0, t_max, &mut alone);
-            let packet = packet.with_t_max([t_max; 8]);
+            let packet = packet.with_t_max([t_max; PACKET]);
             let mut lanes = LaneTallies::default();
             tracer.occluded_packet_counting::<Tally>(&packet, &mut lanes);
             assert_eq!(lanes.lane(k), alone, "{} occluded", tracer.name());
             // The other lanes took no part.
-            assert!((0..8)
+            assert!((0..PACKET)
                 .filter(|&j| j != k)
                 .all(|j| lanes.lane(j) == Tally::default()));
         }
@@ -242,7 +243,7 @@ fn bench_stats_count_every_set_along_every_path() {
             let lanes = work["lanes_at_leaves"].as_f64();
             assert_eq!(lanes.is_none(), work["api"] == "p3trace-single", "{name}");
             assert!(
-                lanes.is_none_or(|l| (1.0..=8.0).contains(&l)),
+                lanes.is_none_or(|l| (1.0..=PACKET as f64).contains(&l)),
                 "{name}: {lanes:?}"
             );
         }
@@ -478,7 +479,7 @@ fn compare_gives_the_ratio_of_two_cost_images() {
         .parse()
         .unwrap();
     assert!(ratio > 1.0, "brute force tests more than the BVH: {text}");
-    assert!(text.contains("(none, stream mode)"), "{text}");
+    assert!(text.contains("(none, stream mode, packets of "), "{text}");
     let colour = dir.join("colour.png").display().to_string();
     common::succeeds(&[
         "render",

@@ -8,6 +8,7 @@ use p3trace::render::sampler::SampleGrid;
 use p3trace::render::shade::Profile;
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::p3f::parse_text;
+use p3trace::simd::PACKET;
 
 fn error_of(text: &str) -> String {
     match parse_text(text) {
@@ -78,12 +79,12 @@ fn ray_along_a_box_face_hits_nothing_beside_it() {
         let name = tracer.name();
         assert_eq!(tracer.closest(&ray, 0.0, f32::INFINITY), None, "{name}");
         assert_eq!(
-            tracer.closest_packet(&RayPacket::new(&[ray; 8])),
-            [None; 8],
+            tracer.closest_packet(&RayPacket::new(&[ray; PACKET])),
+            [None; PACKET],
             "{name}"
         );
         assert_eq!(
-            tracer.occluded_packet(&RayPacket::new(&[ray; 8])),
+            tracer.occluded_packet(&RayPacket::new(&[ray; PACKET])),
             0,
             "{name}"
         );
@@ -164,12 +165,12 @@ fn the_grid_walk_allows_for_where_cell_of_puts_a_boundary() {
     };
     let grid = Tracer::new(g, &options);
     let d = Vec3::new(0.57735026, 0.57735026, -0.57735026);
-    let rays = [Ray::new(Vec3::splat(2.5), d); 8];
+    let rays = [Ray::new(Vec3::splat(2.5), d); PACKET];
     let expected = brute.closest(&rays[0], 0.0, 3.5);
     assert!(expected.is_some());
     assert_eq!(grid.closest(&rays[0], 0.0, 3.5), expected);
-    let packet = RayPacket::new(&rays).with_t_max([3.5; 8]);
-    assert_eq!(grid.closest_packet(&packet), [expected; 8]);
+    let packet = RayPacket::new(&rays).with_t_max([3.5; PACKET]);
+    assert_eq!(grid.closest_packet(&packet), [expected; PACKET]);
 }
 
 /// crash-4739cb5f1bda and crash-155181915153 (2026-11-30, over 5853abf), made

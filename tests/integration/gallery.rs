@@ -6,6 +6,8 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::process::Command;
 
+use p3trace::simd::PACKET;
+
 use crate::common::{project_file, scratch, stderr};
 
 fn file_names(dir: &Path) -> BTreeSet<String> {
@@ -52,9 +54,16 @@ fn assert_the_same(out: &Path, committed: &str, names: &BTreeSet<String>, script
 
 /// `docs/cost/`, the cost images of the README and the benchmarking page, is what
 /// `scripts/cost-gallery.sh` renders; its dragon images need the course material, and
-/// are left out of the check without it.
+/// are left out of the check without it. Its counts are those of packets of eight: a
+/// 16-wide build's packets count other work.
 #[test]
 fn the_cost_images_are_what_their_script_renders() {
+    if PACKET != 8 {
+        crate::common::skip(
+            "docs/cost/ holds the counts of packets of 8 rays; this build's are 16",
+        );
+        return;
+    }
     let out = scratch("cost_gallery");
     let shared = crate::common::shared();
     let mut script = Command::new(project_file("scripts/cost-gallery.sh"));

@@ -7,9 +7,9 @@
 
 use glam::{Vec2, Vec3};
 use p3trace::intersect::{
-    self, Aabb, BoxPack8, BoxRay, BoxRay8, Boxes, Hits8, IntersectOptions, Intervals8, LeafPack,
-    RayQuery, RayQuery8, Shapes, SpherePack8, SphereRoots, Spheres, SurfacePoint, SurfacePoint8,
-    TriangleHit, TriangleHit8, TrianglePack8, Triangles,
+    self, Aabb, BoxPack8, BoxRay, BoxRays, Boxes, Hits8, IntersectOptions, Intervals, LeafPack,
+    PacketQuery, RayQuery, Shapes, SpherePack8, SphereRoots, Spheres, SurfacePoint, SurfacePoint8,
+    TriangleHit, TriangleHits, TrianglePack8, Triangles,
 };
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::camera::{Camera, FilmSample};
@@ -17,7 +17,9 @@ use p3trace::render::light::{Emitter, LightSample, Receiver, Rectangle};
 use p3trace::render::sampler::{Sample, SampleGrid, SampleRng};
 use p3trace::render::shade::{Bounce, Bounce8, Optics8, Phong, Phong8};
 use p3trace::scene::{CameraSpec, Material};
-use p3trace::simd::{F32x8, Mask8, Vec3x8};
+use p3trace::simd::{
+    Bits, F32x16, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, Vec3x8, PACKET,
+};
 use proptest::prelude::*;
 
 const NAN: f32 = f32::NAN;
@@ -102,17 +104,17 @@ fn triangle() -> impl Strategy<Value = [Vec3; 3]> {
 
 #[derive(Clone, Debug)]
 struct Packet {
-    rays: [Ray; 8],
-    t_min: [f32; 8],
-    t_max: [f32; 8],
-    active: u8,
+    rays: [Ray; PACKET],
+    t_min: [f32; PACKET],
+    t_max: [f32; PACKET],
+    active: LaneBits,
 }
 
 fn packet() -> impl Strategy<Value = Packet> {
     (
-        prop::array::uniform8(ray()),
-        prop::array::uniform8(interval()),
-        any::<u8>(),
+        prop::array::uniform(ray()),
+        prop::array::uniform(interval()),
+        any::<LaneBits>(),
     )
         .prop_map(|(rays, limits, active)| Packet {
             rays,
@@ -135,32 +137,33 @@ fn coherent_packet() -> impl Strategy<Value = Packet> {
 }
 
 /// Whether the directions of the lanes `lanes` agree in sign on every axis.
-fn same_signs(p: &Packet, lanes: u8) -> bool {
-    let mut signs = (0..8)
-        .filter(|k| lanes >> k & 1 == 1)
+fn same_signs(p: &Packet, lanes: LaneBits) -> bool {
+    let mut signs = (0..PACKET)
+        .filter(|&k| lanes.has(k))
         .map(|k| p.rays[k].dir.recip().cmpgt(Vec3::ZERO).bitmask());
     let first = signs.next();
     signs.all(|s| Some(s) == first)
 }
 
 impl Packet {
-    fn soa(&self) -> (RayPacket<'_>, F32x8, F32x8, u8) {
+    fn soa(&self) -> (RayPacket<'_>, F32xP, F32xP, LaneBits) {
         (
             RayPacket::new(&self.rays),
-            F32x8::from_array(self.t_min),
-            F32x8::from_array(self.t_max),
+            F32xP::from_array(self.t_min),
+            F32xP::from_array(self.t_max),
             self.active,
         )
     }
 
     fn active(&self, lane: usize) -> bool {
-        self.active >> lane & 1 == 1
+        self.active.has(lane)
     }
 }
 
-/// Lane `lane` of a kernel's answer equals the scalar `expected` bit for bit.
-fn same(what: &str, lane: usize, expected: Option<f32>, hit: Mask8, t: F32x8) {
-    let got = (hit.bitmask() >> lane & 1 == 1).then(|| t.to_array()[lane]);
+/// Lane `lane` of a kernel's answer (of eight lanes or a packet's) equals the scalar
+/// `expected` bit for bit.
+fn same<F: Floats>(what: &str, lane: usize, expected: Option<f32>, hit: F::Mask, t: F) {
+    let got = hit.bitmask().has(lane).then(|| t.lane(lane));
     assert_eq!(
         got.map(f32::to_bits),
         expected.map(f32::to_bits),
@@ -169,7 +172,12 @@ fn same(what: &str, lane: usize, expected: Option<f32>, hit: Mask8, t: F32x8) {
 }
 
 /// [`same`] for the entry and the exit of a box interval.
-fn same_interval(what: &str, lane: usize, expected: Option<(f32, f32)>, lanes: Intervals8) {
+fn same_interval<F: Floats>(
+    what: &str,
+    lane: usize,
+    expected: Option<(f32, f32)>,
+    lanes: Intervals<F>,
+) {
     same(
         &format!("{what} entry"),
         lane,
@@ -188,9 +196,9 @@ fn same_interval(what: &str, lane: usize, expected: Option<(f32, f32)>, lanes: I
 
 /// The lanes of `active` of an answer of the box tests, which answer every lane (their
 /// callers keep the lanes they ask about).
-fn within(lanes: Intervals8, active: u8) -> Intervals8 {
-    Intervals8 {
-        hit: lanes.hit & Mask8::from_bitmask(active),
+fn within<F: Floats>(lanes: Intervals<F>, active: <F::Mask as LaneMask>::Bits) -> Intervals<F> {
+    Intervals {
+        hit: lanes.hit & F::Mask::from_bitmask(active),
         ..lanes
     }
 }
@@ -205,7 +213,7 @@ const CASES: u32 = 2000;
 /// A packed kind's [`LeafPack`] against its scalar test (`Shapes::intersect`), bit for
 /// bit: the leaf kernel, one ray within `(t_min, t_max)` against the pack of all of
 /// `storage` (padding slots miss), and each slot against the lanes of `p` from `t_min`,
-/// as the pack holds it and as `storage` does (`Shapes::intersect8`).
+/// as the pack holds it and as `storage` does (`Shapes::intersect_packet`).
 fn pack_equals_scalar<K: LeafPack>(
     what: &str,
     storage: &K,
@@ -226,26 +234,36 @@ fn pack_equals_scalar<K: LeafPack>(
     }
     let (rays, _, hi, active) = p.soa();
     let rays = RayPacket { t_min, ..rays };
-    let query = RayQuery8 {
+    let query = PacketQuery {
         packet: &rays,
         options,
     };
     for slot in 0..n {
-        let in_pack = K::slot8(&pack, slot, &query, hi, active);
-        let in_storage = storage.intersect8(slot, &query, hi, active);
+        let in_pack = K::slot_packet(&pack, slot, &query, hi, active);
+        let in_storage = storage.intersect_packet(slot, &query, hi, active);
         for (k, ray) in p.rays.iter().enumerate() {
             let lane = RayQuery::new(ray, t_min, options);
             let scalar = storage
                 .intersect(slot, &lane, p.t_max[k])
                 .filter(|_| p.active(k));
             same_hit(&format!("{what} slot {slot}"), k, scalar, in_pack);
-            same_hit(&format!("{what} {slot}, intersect8"), k, scalar, in_storage);
+            same_hit(
+                &format!("{what} {slot}, intersect_packet"),
+                k,
+                scalar,
+                in_storage,
+            );
         }
     }
 }
 
 /// [`same`] for `t`, `u` and `v`.
-fn same_hit(what: &str, lane: usize, expected: Option<TriangleHit>, hits: TriangleHit8) {
+fn same_hit<F: Floats>(
+    what: &str,
+    lane: usize,
+    expected: Option<TriangleHit>,
+    hits: TriangleHits<F>,
+) {
     same(
         &format!("{what} t"),
         lane,
@@ -361,7 +379,7 @@ proptest! {
     #[test]
     fn box_interval_packet_equals_scalar(p in packet(), (lo, hi) in aabb()) {
         let (rays, t_min, t_max, active) = p.soa();
-        let lanes = within(BoxRay8::new(&rays).interval(lo, hi, t_min, t_max), active);
+        let lanes = within(BoxRays::new(&rays).interval(lo, hi, t_min, t_max), active);
         for (i, ray) in p.rays.iter().enumerate() {
             let scalar = BoxRay::new(ray.origin, ray.dir.recip())
                 .interval(lo, hi, p.t_min[i], p.t_max[i])
@@ -499,14 +517,14 @@ proptest! {
     fn box_holds_equal_scalar(
         p in packet(),
         boxes in prop::collection::vec(aabb(), 1..=8),
-        hits in prop::array::uniform8(coord()),
+        hits in prop::array::uniform::<_, PACKET>(coord()),
     ) {
-        let t = F32x8::from_array(hits);
         let (rays, t_min, _, _) = p.soa();
         let ray = BoxRay::new(p.rays[0].origin, p.rays[0].dir.recip());
-        let one_ray = ray.holds8(&BoxPack8::new(&boxes), p.t_min[0], t).bitmask();
+        let eight = F32x8::from_fn(|k| hits[k]);
+        let one_ray = ray.holds8(&BoxPack8::new(&boxes), p.t_min[0], eight).bitmask();
         let (lo, hi) = boxes[0];
-        let one_box = BoxRay8::new(&rays).holds(lo, hi, t_min, t).bitmask();
+        let one_box = BoxRays::new(&rays).holds(lo, hi, t_min, F32xP::from_array(hits)).bitmask();
         for (k, &hit) in hits.iter().enumerate() {
             if let Some(&(lo, hi)) = boxes.get(k) {
                 let scalar = ray.holds(lo, hi, p.t_min[0], hit);
@@ -550,19 +568,19 @@ proptest! {
     ) {
         let (rays, _, t_max, active) = p.soa();
         let lanes = active & rays.traceable();
-        let t_min = F32x8::splat(p.t_min[0]);
-        let box_rays = BoxRay8::new(&rays);
+        let t_min = F32xP::splat(p.t_min[0]);
+        let box_rays = BoxRays::new(&rays);
         let entered = box_rays.interval(lo, hi, t_min, t_max).hit.bitmask() & lanes;
         let Some(range) = box_rays.range(lanes) else {
             // Only lanes of mixed signs, or none, have no range.
             prop_assert!(lanes == 0 || !same_signs(&p, lanes));
             return Ok(());
         };
-        let largest = (0..8)
-            .filter(|k| lanes >> k & 1 == 1)
+        let largest = (0..PACKET)
+            .filter(|&k| lanes.has(k))
             .fold(f32::NEG_INFINITY, |m, k| m.max(p.t_max[k]));
         if entered != 0 {
-            prop_assert!(range.enters(lo, hi, p.t_min[0], largest), "lanes {entered:08b} enter");
+            prop_assert!(range.enters(lo, hi, p.t_min[0], largest), "lanes {entered:b} enter");
         }
     }
 
@@ -574,7 +592,7 @@ proptest! {
         (t_min, t_max) in interval(),
     ) {
         let (rays, .., active) = p.soa();
-        let Some(range) = BoxRay8::new(&rays).range(active & rays.traceable()) else {
+        let Some(range) = BoxRays::new(&rays).range(active & rays.traceable()) else {
             return Ok(());
         };
         let pack = BoxPack8::new(&boxes);
@@ -589,19 +607,22 @@ proptest! {
     /// lanes gives, wherever no lane is NaN (a zero of either sign where they tie).
     #[test]
     fn min_and_max_lane_equal_a_fold(
-        lanes in prop::array::uniform8(coord().prop_filter("no NaN", |t| !t.is_nan())),
+        lanes in prop::array::uniform16(coord().prop_filter("no NaN", |t| !t.is_nan())),
     ) {
-        let packed = F32x8::from_array(lanes);
-        prop_assert_eq!(packed.min_lane(), lanes.iter().copied().fold(INF, f32::min));
-        prop_assert_eq!(packed.max_lane(), lanes.iter().copied().fold(-INF, f32::max));
+        let sixteen = F32x16::from_array(lanes);
+        prop_assert_eq!(sixteen.min_lane(), lanes.iter().copied().fold(INF, f32::min));
+        prop_assert_eq!(sixteen.max_lane(), lanes.iter().copied().fold(-INF, f32::max));
+        let eight = F32x8::from_fn(|k| lanes[k]);
+        prop_assert_eq!(eight.min_lane(), lanes[..8].iter().copied().fold(INF, f32::min));
+        prop_assert_eq!(eight.max_lane(), lanes[..8].iter().copied().fold(-INF, f32::max));
     }
 
-    /// `beyond8` answers each lane as `beyond`.
+    /// `beyond_lanes` answers each lane as `beyond`.
     #[test]
-    fn beyond8_equals_scalar(entry in coord(), limits in prop::array::uniform8(coord())) {
-        let lanes = intersect::beyond8(F32x8::splat(entry), F32x8::from_array(limits)).bitmask();
+    fn beyond_lanes_equals_scalar(entry in coord(), limits in prop::array::uniform::<_, PACKET>(coord())) {
+        let lanes = intersect::beyond_lanes(F32xP::splat(entry), F32xP::from_array(limits)).bitmask();
         for (k, &limit) in limits.iter().enumerate() {
-            prop_assert_eq!(lanes >> k & 1 == 1, intersect::beyond(entry, limit), "lane {}", k);
+            prop_assert_eq!(lanes.has(k), intersect::beyond(entry, limit), "lane {}", k);
         }
     }
 

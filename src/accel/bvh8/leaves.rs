@@ -7,11 +7,11 @@
 use super::node::{leaf_parts, leaf_ref, pack_code, ChildRef};
 use crate::accel::count::CountLanes;
 use crate::accel::hit::ClosestHit;
-use crate::intersect::{LeafPack, RayQuery, RayQuery8};
+use crate::intersect::{LeafPack, PacketQuery, RayQuery};
 use crate::prim::{packed_kinds, PrimId, PrimKind};
 use crate::ray::Hit;
 use crate::scene::Geometry;
-use crate::simd::{for_lanes, F32x8};
+use crate::simd::{for_lanes, F32xP, LaneBits, PACKET};
 
 /// The packs of one packed kind, and the ids of each pack's primitives lane by lane.
 #[derive(Clone, Debug)]
@@ -72,19 +72,19 @@ impl<K: LeafPack> Packs<K> {
     fn closest_packet<C>(
         &self,
         (index, count): (usize, usize),
-        query: &RayQuery8,
-        lanes: u8,
-        closest: &mut [ClosestHit; 8],
+        query: &PacketQuery,
+        lanes: LaneBits,
+        closest: &mut [ClosestHit; PACKET],
         counted: &mut impl CountLanes<C>,
     ) {
         counted.leaf(lanes);
         counted.prims(lanes, count as u32);
         let (pack, ids) = (&self.packs[index], &self.ids[index]);
         // Each lane's bound, renewed in the lanes a primitive hits (not gathered again
-        // from all eight: that was a fifth of this loop's instructions).
+        // from all the lanes: that was a fifth of this loop's instructions).
         let mut bound = closest.each_ref().map(ClosestHit::bound);
         for (slot, &prim) in ids.iter().enumerate().take(count) {
-            let hits = K::slot8(pack, slot, query, F32x8::from_array(bound), lanes);
+            let hits = K::slot_packet(pack, slot, query, F32xP::from_array(bound), lanes);
             let hit = hits.hit.bitmask();
             if hit != 0 {
                 let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
@@ -107,18 +107,18 @@ impl<K: LeafPack> Packs<K> {
     fn blocks_packet<C>(
         &self,
         (index, count): (usize, usize),
-        query: &RayQuery8,
-        lanes: u8,
+        query: &PacketQuery,
+        lanes: LaneBits,
         counted: &mut impl CountLanes<C>,
-    ) -> u8 {
+    ) -> LaneBits {
         counted.leaf(lanes);
         let pack = &self.packs[index];
-        let t_max = F32x8::from_array(query.packet.t_max);
-        let mut blocked = 0;
+        let t_max = F32xP::from_array(query.packet.t_max);
+        let mut blocked: LaneBits = 0;
         for slot in 0..count {
             let open = lanes & !blocked;
             counted.prims(open, 1);
-            let hits = K::slot8(pack, slot, query, t_max, open);
+            let hits = K::slot_packet(pack, slot, query, t_max, open);
             blocked |= hits.hit.bitmask();
             if blocked == lanes {
                 break;
@@ -205,9 +205,9 @@ macro_rules! define_leaves {
             pub fn closest_packet<C>(
                 &self,
                 child: ChildRef,
-                query: &RayQuery8,
-                lanes: u8,
-                closest: &mut [ClosestHit; 8],
+                query: &PacketQuery,
+                lanes: LaneBits,
+                closest: &mut [ClosestHit; PACKET],
                 counted: &mut impl CountLanes<C>,
             ) -> bool {
                 let (code, count, index) = leaf_parts(child);
@@ -229,10 +229,10 @@ macro_rules! define_leaves {
             pub fn blocks_packet<C>(
                 &self,
                 child: ChildRef,
-                query: &RayQuery8,
-                lanes: u8,
+                query: &PacketQuery,
+                lanes: LaneBits,
                 counted: &mut impl CountLanes<C>,
-            ) -> Option<u8> {
+            ) -> Option<LaneBits> {
                 let (code, count, index) = leaf_parts(child);
                 let fewer = count < lanes.count_ones() as usize;
                 match code {

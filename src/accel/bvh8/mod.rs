@@ -6,7 +6,7 @@
 //! together; other leaves are the binary tree's, tested one primitive at a time. No file
 //! here names a kind: the packs and their dispatch are generated from the list.
 //!
-//! Traversal (`traverse.rs` for single rays, `packet.rs` for eight rays together) visits
+//! Traversal (`traverse.rs` for single rays, `packet.rs` for a packet's rays together) visits
 //! the hit children nearest first, with their entry distances on the stack; popped
 //! entries beyond the closest hit are skipped (ties are visited, as in the binary BVH, so
 //! the answer is brute force's).
@@ -21,10 +21,11 @@ use super::bvh2::{Bvh2Stats, BvhBuild};
 use super::count::Count;
 use super::hit::ClosestHit;
 use super::structure::Structure;
-use crate::intersect::{RayQuery, RayQuery8};
+use crate::intersect::{PacketQuery, RayQuery};
 use crate::plural::count;
 use crate::prim::PrimId;
 use crate::scene::Geometry;
+use crate::simd::{LaneBits, PACKET};
 use leaves::Leaves;
 use node::{Node8, WIDTH};
 
@@ -75,8 +76,8 @@ impl Structure for Bvh8 {
     fn closest_packet<C: Count>(
         &self,
         geometry: &Geometry,
-        query: &RayQuery8,
-        closest: &mut [ClosestHit; 8],
+        query: &PacketQuery,
+        closest: &mut [ClosestHit; PACKET],
         count: &mut C::Lanes,
     ) {
         self.packet_closest::<C>(geometry, query, closest, count);
@@ -86,9 +87,9 @@ impl Structure for Bvh8 {
     fn occluded_packet<C: Count>(
         &self,
         geometry: &Geometry,
-        query: &RayQuery8,
+        query: &PacketQuery,
         count: &mut C::Lanes,
-    ) -> u8 {
+    ) -> LaneBits {
         self.packet_occluded::<C>(geometry, query, count)
     }
 }

@@ -11,9 +11,9 @@ use super::{Bvh8, STACK_SIZE};
 use crate::accel::count::{Count, CountLanes};
 use crate::accel::hit::ClosestHit;
 use crate::accel::stack::Stack;
-use crate::intersect::{beyond8, BoxRay8, RayQuery8, RayRange};
+use crate::intersect::{beyond_lanes, BoxRays, PacketQuery, RayRange};
 use crate::scene::Geometry;
-use crate::simd::{for_lanes, F32x8, Mask8};
+use crate::simd::{for_lanes, F32xP, LaneBits, MaskP, PACKET};
 
 /// A packet whose lanes in a subtree drop to this many finishes it one ray at a time.
 const SINGLE_RAY_LANES: u32 = 2;
@@ -28,8 +28,8 @@ impl Bvh8 {
     pub(super) fn packet_closest<C: Count>(
         &self,
         geometry: &Geometry,
-        query: &RayQuery8,
-        closest: &mut [ClosestHit; 8],
+        query: &PacketQuery,
+        closest: &mut [ClosestHit; PACKET],
         count: &mut C::Lanes,
     ) {
         let packet = query.packet;
@@ -37,18 +37,18 @@ impl Bvh8 {
         if self.nodes.is_empty() || active == 0 {
             return;
         }
-        let box_rays = BoxRay8::new(packet);
-        let lanes_t_min = F32x8::splat(t_min);
+        let box_rays = BoxRays::new(packet);
+        let lanes_t_min = F32xP::splat(t_min);
         let mut limit = lanes_of(closest, ClosestHit::limit);
         let range = box_rays.range(active);
         // The lanes' limits when the walk starts: as hits bring them closer, the lanes'
         // own box tests cull by distance.
         let range_limit = largest(limit, active);
-        let mut stack = Stack::<(ChildRef, u8, f32), STACK_SIZE>::new();
+        let mut stack = Stack::<(ChildRef, LaneBits, f32), STACK_SIZE>::new();
         stack.push((0, active, t_min));
         while let Some((child, lanes, t_entry)) = stack.pop() {
             // Beyond every lane's closest hit: nothing closer inside (ties are visited).
-            if lanes & !beyond8(F32x8::splat(t_entry), limit).bitmask() == 0 {
+            if lanes & !beyond_lanes(F32xP::splat(t_entry), limit).bitmask() == 0 {
                 continue;
             }
             let leaf = child & LEAF != 0;
@@ -77,7 +77,7 @@ impl Bvh8 {
             let candidates = candidates(node, range.as_ref(), t_min, range_limit);
             count.node(lanes);
             count.boxes(lanes, candidates.count_ones());
-            let kept = Mask8::from_bitmask(lanes);
+            let kept = MaskP::from_bitmask(lanes);
             // (child, its lanes, the nearest lane's entry) for the children entered, sorted
             // on the stack with the nearest on top to be popped next.
             let floor = stack.len();
@@ -86,7 +86,7 @@ impl Bvh8 {
                 let intervals = box_rays.interval(min, max, lanes_t_min, limit);
                 let hit = intervals.hit & kept;
                 if hit.any() {
-                    let nearest = hit.select(intervals.entry, F32x8::splat(f32::INFINITY));
+                    let nearest = hit.select(intervals.entry, F32xP::splat(f32::INFINITY));
                     let entry = (node.child[c], hit.bitmask(), nearest.min_lane());
                     stack.push_sorted(floor, entry, |e| e.2);
                 }
@@ -99,20 +99,20 @@ impl Bvh8 {
     pub(super) fn packet_occluded<C: Count>(
         &self,
         geometry: &Geometry,
-        query: &RayQuery8,
+        query: &PacketQuery,
         count: &mut C::Lanes,
-    ) -> u8 {
+    ) -> LaneBits {
         let packet = query.packet;
         let (active, t_min, t_max) = (packet.active, packet.t_min, &packet.t_max);
         if self.nodes.is_empty() || active == 0 {
             return 0;
         }
-        let box_rays = BoxRay8::new(packet);
-        let (lanes_t_min, lanes_t_max) = (F32x8::splat(t_min), F32x8::from_array(*t_max));
+        let box_rays = BoxRays::new(packet);
+        let (lanes_t_min, lanes_t_max) = (F32xP::splat(t_min), F32xP::from_array(*t_max));
         let range = box_rays.range(active);
         let range_limit = largest(lanes_t_max, active);
-        let mut blocked = 0u8;
-        let mut stack = Stack::<(ChildRef, u8), STACK_SIZE>::new();
+        let mut blocked: LaneBits = 0;
+        let mut stack = Stack::<(ChildRef, LaneBits), STACK_SIZE>::new();
         stack.push((0, active));
         while let Some((child, lanes)) = stack.pop() {
             let lanes = lanes & !blocked;
@@ -167,15 +167,18 @@ impl Bvh8 {
     }
 }
 
-/// `distance` of each lane's closest hit so far, as eight lanes.
-pub(super) fn lanes_of(closest: &[ClosestHit; 8], distance: impl Fn(&ClosestHit) -> f32) -> F32x8 {
-    F32x8::from_array(closest.each_ref().map(distance))
+/// `distance` of each lane's closest hit so far, as a packet's lanes.
+pub(super) fn lanes_of(
+    closest: &[ClosestHit; PACKET],
+    distance: impl Fn(&ClosestHit) -> f32,
+) -> F32xP {
+    F32xP::from_array(closest.each_ref().map(distance))
 }
 
 /// The largest of `t`'s lanes in `lanes` (at least one).
-fn largest(t: F32x8, lanes: u8) -> f32 {
-    Mask8::from_bitmask(lanes)
-        .select(t, F32x8::splat(f32::NEG_INFINITY))
+fn largest(t: F32xP, lanes: LaneBits) -> f32 {
+    MaskP::from_bitmask(lanes)
+        .select(t, F32xP::splat(f32::NEG_INFINITY))
         .max_lane()
 }
 
