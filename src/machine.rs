@@ -13,7 +13,8 @@ pub const TARGET_CPU: &str = env!("P3TRACE_TARGET_CPU");
 /// Every target feature the compiler could use, separated by ", ".
 pub const TARGET_FEATURES: &str = env!("P3TRACE_TARGET_FEATURES");
 
-/// What `p3trace --version` prints after the name.
+/// What `p3trace --version` prints after the name; `packets` is `simd::PACKET`, the rays
+/// of a packet as `build.rs` chose them.
 pub const LONG_VERSION: &str = concat!(
     env!("CARGO_PKG_VERSION"),
     " (commit ",
@@ -22,7 +23,9 @@ pub const LONG_VERSION: &str = concat!(
     env!("P3TRACE_TARGET_CPU"),
     " (",
     env!("P3TRACE_TARGET_FEATURES"),
-    ")"
+    ")\npackets: ",
+    env!("P3TRACE_PACKET"),
+    " rays"
 );
 
 #[cfg(target_arch = "x86_64")]

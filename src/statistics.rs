@@ -21,6 +21,7 @@ fn program_and_cpu() -> (Value, Value) {
         "commit": machine::COMMIT,
         "target_cpu": machine::TARGET_CPU,
         "target_features": machine::TARGET_FEATURES.split(", ").collect::<Vec<_>>(),
+        "packet_width": p3trace::simd::PACKET,
     });
     let cpu = json!({
         "model": machine::cpu_model(),

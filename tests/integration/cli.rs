@@ -1,8 +1,8 @@
 //! The command line: exit codes, messages, and what each subcommand prints.
 
 use crate::common;
-
 use crate::common::{p3trace, scratch, stderr, stdout, succeeds};
+use p3trace::simd::PACKET;
 
 fn showcase() -> String {
     common::project_file("scenes/showcase.p3f")
@@ -617,6 +617,7 @@ fn render_and_bench_write_their_statistics_as_json() {
     assert!(stats["program"]["commit"]
         .as_str()
         .is_some_and(|c| !c.is_empty()));
+    assert_eq!(stats["program"]["packet_width"], PACKET);
     assert!(stats["cpu"]["logical_cpus"].as_u64().unwrap() >= 1);
     assert_eq!(stats["resolution"], serde_json::json!([32, 24]));
     assert_eq!(stats["samples_per_pixel"], 2);
@@ -694,6 +695,10 @@ fn version_names_the_commit_and_the_instruction_set() {
     let expected = format!("p3trace {} (commit ", env!("CARGO_PKG_VERSION"));
     assert!(text.starts_with(&expected), "{text}");
     assert!(text.contains("\ninstruction set: "), "{text}");
+    assert!(
+        text.contains(&format!("\npackets: {PACKET} rays")),
+        "{text}"
+    );
     // The project's build (.cargo/config.toml) targets x86-64-v3.
     if cfg!(target_feature = "avx2") {
         assert!(text.contains("avx2") && text.contains("fma"), "{text}");
@@ -702,7 +707,8 @@ fn version_names_the_commit_and_the_instruction_set() {
 
 /// On a CPU without what the binary was compiled for, it names what is missing and exits
 /// 1 instead of dying of an illegal instruction. QEMU's user-mode emulator stands in for
-/// older CPUs (`.ci/run` installs it): Nehalem has no AVX, Sandy Bridge no AVX2.
+/// older CPUs (`.ci/run` installs it): Nehalem has no AVX, Sandy Bridge no AVX2, Haswell
+/// no AVX-512.
 #[test]
 fn an_older_cpu_is_told_what_it_lacks() {
     if !cfg!(target_feature = "avx2") {
@@ -738,9 +744,16 @@ fn an_older_cpu_is_told_what_it_lacks() {
     assert_eq!(run.status.code(), Some(1), "{message}");
     assert!(message.contains("lacks avx2, bmi1"), "{message}");
     assert!(!message.contains("lacks avx,"), "{message}");
-    // A CPU with everything runs it.
+    // Haswell has all of x86-64-v3, the default build's, but not AVX-512, which a build
+    // for x86-64-v4 (packets of 16) uses.
     let run = emulate("Haswell", &["--version"]).unwrap();
-    assert!(run.status.success(), "{}", stderr(&run));
+    let message = stderr(&run);
+    if cfg!(target_feature = "avx512f") {
+        assert_eq!(run.status.code(), Some(1), "{message}");
+        assert!(message.contains("lacks avx512f"), "{message}");
+    } else {
+        assert!(run.status.success(), "{message}");
+    }
 }
 
 /// Where stderr is not a terminal (a farm's log, CI, this test), progress shows as plain
