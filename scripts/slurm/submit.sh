@@ -10,8 +10,11 @@
 # tile is missing) and `merge=JOBID`.
 #
 # Environment: P3TRACE, the p3trace binary (default: the one on PATH; every node must
-# reach it and the scene at the same path); P3TRACE_CPUS, CPUs (and threads) per task
-# (default 1); P3TRACE_SBATCH, more sbatch options (a partition, a time limit, ...).
+# reach it and the scene at the same path); P3TRACE_PARTITIONS, binaries for the tiles of
+# some partitions, as "PARTITION=BINARY ..." (say a build for AVX-512 for a partition of
+# such nodes: every build renders the same image; the merge runs $P3TRACE);
+# P3TRACE_CPUS, CPUs (and threads) per task (default 1); P3TRACE_SBATCH, more sbatch
+# options (partitions, a time limit, ...).
 set -euo pipefail
 if [ $# -lt 3 ]; then
   echo "usage: $0 SCENE TILES OUT [render flags]" >&2
@@ -28,6 +31,12 @@ out=$(abs "$out")
 parts=$out.parts
 P3TRACE=$(command -v "${P3TRACE:-p3trace}") || { echo "$0: no p3trace binary (set P3TRACE)" >&2; exit 2; }
 export P3TRACE
+for entry in ${P3TRACE_PARTITIONS:-}; do
+  case $entry in
+    ?*=/*) [ -x "${entry#*=}" ] || { echo "$0: P3TRACE_PARTITIONS: ${entry#*=} is not an executable" >&2; exit 2; } ;;
+    *) echo "$0: P3TRACE_PARTITIONS: '$entry' is not PARTITION=/absolute/path/to/p3trace" >&2; exit 2 ;;
+  esac
+done
 mkdir -p "$parts"
 # Only the tiles without a part: all of them on the first run.
 shopt -s nullglob

@@ -54,11 +54,18 @@ impl Cluster {
             .expect("local-cluster.sh runs")
     }
 
-    /// `submit.sh SCENE 8 OUT flags`: the array's job (if any tile was missing) and the
-    /// merge's.
-    fn submit(&self, scene: &Path, out: &Path, flags: &[&str]) -> (Option<String>, String) {
+    /// `submit.sh SCENE 8 OUT flags` with the environment `env`: the array's job (if any
+    /// tile was missing) and the merge's.
+    fn submit(
+        &self,
+        scene: &Path,
+        out: &Path,
+        flags: &[&str],
+        env: &[(&str, &str)],
+    ) -> (Option<String>, String) {
         let output = self
             .command(project_file("scripts/slurm/submit.sh"))
+            .envs(env.iter().copied())
             .arg(scene)
             .arg(TILES.to_string())
             .arg(out)
@@ -200,10 +207,28 @@ fn a_slurm_job_array_renders_the_one_machine_image_and_resumes_after_cancellatio
         .map(|s| s.join("scenes/balls_medium.p3f"))
         .unwrap_or_else(|| project_file("scenes/balls_medium.p3f"));
 
-    // 1. The whole array, then its merge.
+    // 1. The whole array, then its merge; the partition's tiles by the binary that
+    //    P3TRACE_PARTITIONS names for it, which notes each tile it renders.
     let flags = ["--resolution", "160x120", "--spp", "4", "--no-skybox"];
     let out = dir.join("frame.png");
-    let (array, merge) = cluster.submit(&scene, &out, &flags);
+    let (named, log) = (dir.join("named-p3trace.sh"), dir.join("named.log"));
+    std::fs::write(
+        &named,
+        format!(
+            "#!/bin/sh\necho \"$4\" >> '{}'\nexec '{}' \"$@\"\n",
+            log.display(),
+            env!("CARGO_BIN_EXE_p3trace")
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&named, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let partitions = format!(
+        "other={} main={}",
+        env!("CARGO_BIN_EXE_p3trace"),
+        named.display()
+    );
+    let env = [("P3TRACE_PARTITIONS", partitions.as_str())];
+    let (array, merge) = cluster.submit(&scene, &out, &flags, &env);
     let array = array.expect("the first submission renders every tile");
     cluster.wait(&[&array, &merge]);
     let tasks = cluster.states(&array);
@@ -211,6 +236,18 @@ fn a_slurm_job_array_renders_the_one_machine_image_and_resumes_after_cancellatio
     for state in tasks.iter().chain(&cluster.states(&merge)) {
         assert_eq!(state, "JobState=COMPLETED ExitCode=0:0");
     }
+    let mut tiles: Vec<String> = std::fs::read_to_string(&log)
+        .expect("the partition's binary ran")
+        .lines()
+        .map(str::to_string)
+        .collect();
+    tiles.sort();
+    assert_eq!(
+        tiles,
+        (0..TILES)
+            .map(|i| format!("{i}/{TILES}"))
+            .collect::<Vec<_>>()
+    );
     let whole = one_machine(&scene, &dir.join("one.png"), &flags);
     assert!(
         std::fs::read(&out).unwrap() == whole,
@@ -222,7 +259,7 @@ fn a_slurm_job_array_renders_the_one_machine_image_and_resumes_after_cancellatio
     let flags = ["--resolution", "320x240", "--spp", "256", "--no-skybox"];
     let out = dir.join("resumed.exr");
     let parts = PathBuf::from(format!("{}.parts", out.display()));
-    let (array, merge) = cluster.submit(&scene, &out, &flags);
+    let (array, merge) = cluster.submit(&scene, &out, &flags, &[]);
     let array = array.unwrap();
     poll("a part to be written", 300, 50, || {
         part_files(&parts).iter().any(|n| n.ends_with(".exr"))
@@ -270,7 +307,7 @@ fn a_slurm_job_array_renders_the_one_machine_image_and_resumes_after_cancellatio
     );
 
     // 3. Again: only the missing tiles are submitted, and the frame is complete.
-    let (array, merge) = cluster.submit(&scene, &out, &flags);
+    let (array, merge) = cluster.submit(&scene, &out, &flags, &[]);
     let array = array.expect("tiles were missing");
     cluster.wait(&[&array, &merge]);
     let tasks = cluster.states(&array);
