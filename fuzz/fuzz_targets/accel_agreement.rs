@@ -14,6 +14,7 @@ use p3trace::render::shade::Profile;
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
 use p3trace::scene::p3f::{parse_text, MAX_MAGNITUDE};
 use p3trace::scene::CameraSpec;
+use p3trace::simd::{Bits, LaneBits, PACKET};
 
 /// A coordinate: mostly small half-integers, so that faces coincide and hits tie, and now
 /// and then any number the reader accepts (up to its limit, tiny, subnormal).
@@ -224,17 +225,21 @@ fuzz_target!(|input: Input| {
                 );
             }
         }
-        for chunk in rays.chunks(8) {
-            let lanes: [(Ray, f32); 8] = std::array::from_fn(|k| chunk[k % chunk.len()]);
+        // The input's eight lane flags, repeated over a packet of sixteen.
+        let active = (0..PACKET / 8).fold(0, |bits, eighth| {
+            bits | LaneBits::from(input.active) << (8 * eighth)
+        });
+        for chunk in rays.chunks(PACKET) {
+            let lanes: [(Ray, f32); PACKET] = std::array::from_fn(|k| chunk[k % chunk.len()]);
             let packet = lanes.map(|(ray, _)| ray);
             let t_max = lanes.map(|(_, t)| t);
             let query = RayPacket::new(&packet)
                 .with_t_max(t_max)
-                .with_active(input.active);
+                .with_active(active);
             let hits = tracer.closest_packet(&query);
             let blocked = tracer.occluded_packet(&query);
-            for k in 0..8 {
-                let on = input.active & (1 << k) != 0;
+            for k in 0..PACKET {
+                let on = active.has(k);
                 let expected = on
                     .then(|| brute.closest(&packet[k], 0.0, t_max[k]))
                     .flatten();
@@ -247,7 +252,7 @@ fuzz_target!(|input: Input| {
                 );
                 let expected = on && brute.occluded(&packet[k], 0.0, t_max[k]);
                 assert_eq!(
-                    blocked & (1 << k) != 0,
+                    blocked.has(k),
                     expected,
                     "{name} lane {k} occluded {:?}\n{text}",
                     packet[k]
