@@ -410,7 +410,7 @@ pub struct BenchArgs {
     /// of the walks built to count, on one thread) and print, per ray, the mean and the
     /// 50th, 90th and 99th percentiles of the interior nodes visited, child boxes tested,
     /// leaves entered, primitives tested (planes included) and grid cells visited; for
-    /// packets, the lanes of eight active at a node and at a leaf; and the structure's
+    /// packets, the lanes (of 8, or 16) active at a node and at a leaf; and the structure's
     /// statistics (nodes, leaves, depth, SAH cost, memory). The timed passes count nothing.
     #[arg(long)]
     pub stats: bool,

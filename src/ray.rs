@@ -35,12 +35,13 @@ impl Ray {
     }
 }
 
-/// [`PACKET`] rays traced together (Embree's `RayK`: 8, or 16 in an AVX-512 build), the one packet type of every layer: the
-/// rays themselves (borrowed, for lanes that go on alone), the same rays as structure of arrays
-/// for the packet kernels of [`crate::intersect`] (lane `i` is ray `i`), each lane's
-/// interval `(t_min, t_max[i])`, and the lanes that are asked (`active`, bit `i` for
-/// lane `i`). `inv_dir = 1 / dir` is computed once, as the scalar callers do with
-/// `ray.dir.recip()`, so the slab tests see the same bits.
+/// [`PACKET`] rays traced together (Embree's `RayK`: 8, or 16 in an AVX-512 build), the
+/// one packet type of every layer: the rays themselves (borrowed, for lanes that go on
+/// alone), the same rays as structure of arrays for the packet kernels of
+/// [`crate::intersect`] (lane `i` is ray `i`), each lane's interval `(t_min, t_max[i])`,
+/// and the lanes that are asked (`active`, bit `i` for lane `i`). `inv_dir = 1 / dir` is
+/// computed once, as the scalar callers do with `ray.dir.recip()`, so the slab tests see
+/// the same bits.
 #[derive(Clone, Copy, Debug)]
 pub struct RayPacket<'r> {
     pub rays: &'r [Ray; PACKET],

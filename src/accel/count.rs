@@ -24,8 +24,8 @@
 //! **Lane shares.** A visit by `n` lanes of a packet adds `SHARE / n` to each of them
 //! ([`Tally::node_share`], [`Tally::leaf_share`]; a single ray adds `SHARE`), so that the
 //! shares of a set's rays add up to its visits: [`SHARE`] divides by every lane count of a
-//! packet, and the sums stay whole. The lanes active at a visit, on average, are then the nodes counted
-//! over the visits.
+//! packet, and the sums stay whole. The lanes active at a visit, on average, are then the
+//! nodes counted over the visits.
 
 use crate::simd::{for_lanes, LaneBits, PACKET};
 

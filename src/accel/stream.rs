@@ -1,6 +1,6 @@
-//! The stream scheduler: many independent queries traced as packets of [`PACKET`] rays through
-//! [`Tracer::closest_packet`] and [`Tracer::occluded_packet`], each answered as its single
-//! ray. The renderer's queues (`render/stream.rs`) and the protocol's `p3trace-stream`
+//! The stream scheduler: many independent queries traced as packets of [`PACKET`] rays
+//! through [`Tracer::closest_packet`] and [`Tracer::occluded_packet`], each answered as its
+//! single ray. The renderer's queues (`render/stream.rs`) and the protocol's `p3trace-stream`
 //! path (`bench.rs`) both trace through it.
 //!
 //! Closest-hit queries go in the order they come: the renderer's queues keep a tile's
@@ -156,9 +156,9 @@ impl<T, B: FnMut(T)> Answers<B, fn(T, NoCount)> {
     }
 }
 
-/// Occlusion queries packed a packet ([`PACKET`] rays) at a time in the order they come, each packet traced
-/// through [`Tracer::occluded_packet`] as soon as it is full (or flushed), the tags of its
-/// blocked queries handed back. A stream grouped by light goes through it directly;
+/// Occlusion queries packed [`PACKET`] at a time in the order they come, each packet
+/// traced through [`Tracer::occluded_packet`] as soon as it is full (or flushed), the tags
+/// of its blocked queries handed back. A stream grouped by light goes through it directly;
 /// [`Occlusions`] keeps one for each light.
 pub struct Packer<'t, T, C = NoCount> {
     tracer: &'t Tracer<'t>,
