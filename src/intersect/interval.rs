@@ -42,8 +42,8 @@
 //! the widenings are plain products.
 //!
 //! The SIMD twins ([`BoxRay::intervals8`], one ray against eight boxes, and
-//! [`BoxRays::interval`], a packet's rays against one box) repeat the scalar arithmetic in the
-//! same order, so each lane equals [`BoxRay::interval`] bit for bit
+//! [`BoxRays::interval`], a packet's rays against one box) repeat the scalar arithmetic in
+//! the same order, so each lane equals [`BoxRay::interval`] bit for bit
 //! (`tests/integration/simd.rs`).
 
 use glam::Vec3;

@@ -1,6 +1,6 @@
-//! The sphere kind: its storage ([`Spheres`]), the ray-sphere test and its SIMD twins
-//! (a packet's rays against one sphere; one ray against a [`SpherePack8`] of a BVH leaf), each
-//! in two forms of the quadratic ([`SphereRoots`]).
+//! The sphere kind: its storage ([`Spheres`]), the ray-sphere test and its SIMD twins (a
+//! packet's rays against one sphere; one ray against a [`SpherePack8`] of a BVH leaf),
+//! each in two forms of the quadratic ([`SphereRoots`]).
 
 use glam::Vec3;
 

@@ -1,6 +1,6 @@
 //! The triangle kind: its storage ([`Triangles`]: a vertex and two edges, optional vertex
-//! normals), Möller-Trumbore and its SIMD twins (a packet's rays against one triangle; one ray
-//! against a [`TrianglePack8`] of a BVH leaf).
+//! normals), Möller-Trumbore and its SIMD twins (a packet's rays against one triangle; one
+//! ray against a [`TrianglePack8`] of a BVH leaf).
 //!
 //! **Precision.** A hit stands only inside the triangle's trusted box (the box the
 //! structures hold it in, `intersect::trusted_box`), by the structures' own box test

@@ -6,8 +6,8 @@
 //! together; other leaves are the binary tree's, tested one primitive at a time. No file
 //! here names a kind: the packs and their dispatch are generated from the list.
 //!
-//! Traversal (`traverse.rs` for single rays, `packet.rs` for a packet's rays together) visits
-//! the hit children nearest first, with their entry distances on the stack; popped
+//! Traversal (`traverse.rs` for single rays, `packet.rs` for a packet's rays together)
+//! visits the hit children nearest first, with their entry distances on the stack; popped
 //! entries beyond the closest hit are skipped (ties are visited, as in the binary BVH, so
 //! the answer is brute force's).
 
