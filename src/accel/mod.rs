@@ -35,7 +35,7 @@ use crate::prim::PrimKind;
 use crate::ray::{lane_mask, Hit, Ray, RayPacket};
 pub use crate::scene::AccelKind;
 use crate::scene::Geometry;
-use crate::simd::{LaneBits, PACKET};
+use crate::simd::{Bits, LaneBits, PACKET};
 use bvh2::Bvh2;
 pub use bvh2::BvhBuild;
 use bvh8::Bvh8;
@@ -380,9 +380,12 @@ impl<'s> Tracer<'s> {
         };
         self.accel
             .closest_packet::<C>(self.geometry, &query, &mut closest, count);
+        let bounded = closest.map(|c| c.hit());
+        if !self.has_unbounded() {
+            return std::array::from_fn(|k| bounded[k].filter(|_| active.has(k)));
+        }
         // As `closest` for each lane: a plane must be closer than the structure's hit.
         let planes = self.closest_planes(&query, active, closest.map(|c| c.limit()), count);
-        let bounded = closest.map(|c| c.hit());
         std::array::from_fn(|k| {
             (active & (1 << k) != 0)
                 .then(|| planes[k].or(bounded[k]))
@@ -407,14 +410,23 @@ impl<'s> Tracer<'s> {
         count.rays(packet.active);
         let active = packet.active & packet.traceable();
         let options = self.options;
-        let query = PacketQuery { packet, options };
-        let planes = self.closest_planes(&query, active, packet.t_max, count);
-        let by_plane = lane_mask(|k| planes[k].is_some());
-        let rest = packet.with_active(active & !by_plane);
-        let query = PacketQuery {
-            packet: &rest,
-            options,
+        let by_plane = if self.has_unbounded() {
+            let query = PacketQuery { packet, options };
+            let planes = self.closest_planes(&query, active, packet.t_max, count);
+            lane_mask(|k| planes[k].is_some())
+        } else {
+            0
         };
+        // The packet itself where every lane it asks is still open (most shadow packets).
+        let open = active & !by_plane;
+        let rest;
+        let packet = if open != packet.active {
+            rest = packet.with_active(open);
+            &rest
+        } else {
+            packet
+        };
+        let query = PacketQuery { packet, options };
         by_plane
             | self
                 .accel
@@ -432,12 +444,6 @@ impl<'s> Tracer<'s> {
         t_max: [f32; PACKET],
         count: &mut impl CountLanes<C>,
     ) -> [Option<Hit>; PACKET] {
-        if PrimKind::UNBOUNDED
-            .iter()
-            .all(|&kind| self.geometry.count(kind) == 0)
-        {
-            return [None; PACKET];
-        }
         let mut closest = t_max.map(ClosestHit::new);
         for kind in PrimKind::UNBOUNDED {
             count.prims(lanes, self.geometry.count(kind) as u32);
@@ -446,6 +452,15 @@ impl<'s> Tracer<'s> {
             }
         }
         closest.map(|c| c.hit())
+    }
+
+    /// Whether the geometry holds unbounded primitives (planes), which no structure holds
+    /// and every query tests beside it.
+    #[inline]
+    fn has_unbounded(&self) -> bool {
+        PrimKind::UNBOUNDED
+            .iter()
+            .any(|&kind| self.geometry.count(kind) != 0)
     }
 
     /// The closest hit among the unbounded primitives (planes), which no structure holds.
