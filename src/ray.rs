@@ -83,6 +83,17 @@ impl<'r> RayPacket<'r> {
         RayPacket { active, ..self }
     }
 
+    /// [`RayPacket::with_active`] made in `copy`, or the packet itself where `active` are
+    /// the lanes it asks (a copy is hundreds of bytes, and most packets keep every lane).
+    #[inline(always)]
+    pub fn asking<'a>(&'a self, active: LaneBits, copy: &'a mut Option<Self>) -> &'a Self {
+        if active == self.active {
+            self
+        } else {
+            copy.insert(self.with_active(active))
+        }
+    }
+
     /// The packet with lane `i` asked within `(t_min, t_max[i])`.
     pub fn with_t_max(self, t_max: [f32; PACKET]) -> Self {
         RayPacket { t_max, ..self }

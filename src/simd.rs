@@ -64,22 +64,15 @@ pub trait Floats:
     fn set_lane(&mut self, i: usize, value: f32);
     fn min(self, rhs: Self) -> Self;
     fn max(self, rhs: Self) -> Self;
-    fn max_num(self, rhs: Self) -> Self;
     fn sqrt(self) -> Self;
     fn abs(self) -> Self;
     fn copysign(self, sign: Self) -> Self;
-    fn min_lane(self) -> f32;
-    fn max_lane(self) -> f32;
     fn lt(self, rhs: Self) -> Self::Mask;
     fn le(self, rhs: Self) -> Self::Mask;
     fn gt(self, rhs: Self) -> Self::Mask;
     fn ge(self, rhs: Self) -> Self::Mask;
     fn eq(self, rhs: Self) -> Self::Mask;
-    fn is_nan(self) -> Self::Mask;
     fn is_finite(self) -> Self::Mask;
-    fn powf(self, exponent: Self, lanes: Self::Mask) -> Self;
-    fn next_up(self) -> Self;
-    fn next_down(self) -> Self;
 }
 
 /// The flags of a [`Floats`]' lanes, from its comparisons.
@@ -88,13 +81,8 @@ pub trait LaneMask:
 {
     type Floats: Floats<Mask = Self>;
     type Bits: Bits;
-    const ALL: Self;
-    const NONE: Self;
     fn from_bitmask(bits: Self::Bits) -> Self;
     fn bitmask(self) -> Self::Bits;
-    fn any(self) -> bool;
-    fn all(self) -> bool;
-    fn none(self) -> bool;
     fn and_not(self, rhs: Self) -> Self;
     fn select(self, if_true: Self::Floats, if_false: Self::Floats) -> Self::Floats;
 }
@@ -620,10 +608,6 @@ macro_rules! lanes {
                 $floats::max(self, rhs)
             }
             #[inline(always)]
-            fn max_num(self, rhs: Self) -> Self {
-                $floats::max_num(self, rhs)
-            }
-            #[inline(always)]
             fn sqrt(self) -> Self {
                 $floats::sqrt(self)
             }
@@ -634,14 +618,6 @@ macro_rules! lanes {
             #[inline(always)]
             fn copysign(self, sign: Self) -> Self {
                 $floats::copysign(self, sign)
-            }
-            #[inline(always)]
-            fn min_lane(self) -> f32 {
-                $floats::min_lane(self)
-            }
-            #[inline(always)]
-            fn max_lane(self) -> f32 {
-                $floats::max_lane(self)
             }
             #[inline(always)]
             fn lt(self, rhs: Self) -> $mask {
@@ -664,24 +640,8 @@ macro_rules! lanes {
                 $floats::eq(self, rhs)
             }
             #[inline(always)]
-            fn is_nan(self) -> $mask {
-                $floats::is_nan(self)
-            }
-            #[inline(always)]
             fn is_finite(self) -> $mask {
                 $floats::is_finite(self)
-            }
-            #[inline(always)]
-            fn powf(self, exponent: Self, lanes: $mask) -> Self {
-                $floats::powf(self, exponent, lanes)
-            }
-            #[inline(always)]
-            fn next_up(self) -> Self {
-                $floats::next_up(self)
-            }
-            #[inline(always)]
-            fn next_down(self) -> Self {
-                $floats::next_down(self)
             }
         }
 
@@ -785,8 +745,6 @@ macro_rules! lanes {
         impl LaneMask for $mask {
             type Floats = $floats;
             type Bits = $bits;
-            const ALL: Self = $mask::ALL;
-            const NONE: Self = $mask::NONE;
             #[inline(always)]
             fn from_bitmask(bits: $bits) -> Self {
                 $mask::from_bitmask(bits)
@@ -794,18 +752,6 @@ macro_rules! lanes {
             #[inline(always)]
             fn bitmask(self) -> $bits {
                 $mask::bitmask(self)
-            }
-            #[inline(always)]
-            fn any(self) -> bool {
-                $mask::any(self)
-            }
-            #[inline(always)]
-            fn all(self) -> bool {
-                $mask::all(self)
-            }
-            #[inline(always)]
-            fn none(self) -> bool {
-                $mask::none(self)
             }
             #[inline(always)]
             fn and_not(self, rhs: Self) -> Self {

@@ -366,13 +366,8 @@ impl<'s> Tracer<'s> {
     ) -> [Option<Hit>; PACKET] {
         count.rays(packet.active);
         let active = packet.active & packet.traceable();
-        let traceable;
-        let packet = if active != packet.active {
-            traceable = packet.with_active(active);
-            &traceable
-        } else {
-            packet
-        };
+        let mut traceable = None;
+        let packet = packet.asking(active, &mut traceable);
         let mut closest = packet.t_max.map(ClosestHit::new);
         let query = PacketQuery {
             packet,
@@ -417,15 +412,8 @@ impl<'s> Tracer<'s> {
         } else {
             0
         };
-        // The packet itself where every lane it asks is still open (most shadow packets).
-        let open = active & !by_plane;
-        let rest;
-        let packet = if open != packet.active {
-            rest = packet.with_active(open);
-            &rest
-        } else {
-            packet
-        };
+        let mut rest = None;
+        let packet = packet.asking(active & !by_plane, &mut rest);
         let query = PacketQuery { packet, options };
         by_plane
             | self

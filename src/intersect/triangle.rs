@@ -28,10 +28,10 @@ use super::{
     gamma, trusted_box, Aabb, BoxPack8, BoxRays, Hits8, IntersectOptions, LeafPack, PacketHits,
     PacketQuery, RayQuery, Shapes, SurfacePoint, SurfacePoint8,
 };
-use crate::ray::{Ray, RayPacket};
+use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::simd::{
     for_lanes, prefetch, Bits, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3Lanes,
-    Vec3x8, Vec3xP,
+    Vec3x8, Vec3xP, PACKET,
 };
 
 /// Distance and barycentric coordinates of a ray-triangle hit: the point is
@@ -224,21 +224,19 @@ impl<F: Floats> TriangleHits<F> {
             v: F::splat(0.0),
         }
     }
+}
 
-    /// The hit of each lane `k`, `lane(k)` (a miss's lanes zero).
-    pub fn from_fn(lane: impl Fn(usize) -> Option<TriangleHit>) -> Self {
-        let field = |f: fn(&TriangleHit) -> f32| F::from_fn(|k| lane(k).as_ref().map_or(0.0, f));
-        let mut hit = <F::Mask as LaneMask>::Bits::EMPTY;
-        for k in 0..F::LANES {
-            if lane(k).is_some() {
-                hit = hit.with(k);
-            }
-        }
+impl PacketHits {
+    /// The hit of each lane (a miss's lanes zero).
+    pub fn from_lanes(hits: [Option<TriangleHit>; PACKET]) -> Self {
+        let lane = |field: fn(&TriangleHit) -> f32| {
+            F32xP::from_array(hits.map(|h| h.as_ref().map_or(0.0, field)))
+        };
         TriangleHits {
-            hit: F::Mask::from_bitmask(hit),
-            t: field(|h| h.t),
-            u: field(|h| h.u),
-            v: field(|h| h.v),
+            hit: MaskP::from_bitmask(lane_mask(|k| hits[k].is_some())),
+            t: lane(|h| h.t),
+            u: lane(|h| h.u),
+            v: lane(|h| h.v),
         }
     }
 }
