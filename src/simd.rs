@@ -151,18 +151,21 @@ pub fn for_lanes<B: Bits>(mut mask: B, mut f: impl FnMut(usize)) {
     }
 }
 
-/// Asks the cache for the lines holding `value` (its first and last bytes: a record of up
-/// to a line's size), to be read soon: a hint, which changes no result.
-#[inline]
+/// Asks the cache for every line holding `value`, to be read soon: a hint, which changes
+/// no result.
+#[inline(always)]
 pub fn prefetch<T>(value: &T) {
     #[cfg(target_arch = "x86_64")]
     // SAFETY: a prefetch only hints the cache; it reads nothing and cannot fault, and
-    // both addresses lie within `value`.
+    // every address lies within `value`.
     unsafe {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        let first = (value as *const T).cast::<i8>();
-        _mm_prefetch::<_MM_HINT_T0>(first);
-        _mm_prefetch::<_MM_HINT_T0>(first.add(std::mem::size_of::<T>().max(1) - 1));
+        let (first, size) = ((value as *const T).cast::<i8>(), std::mem::size_of::<T>());
+        // A line a 64 bytes, and the last byte, whose line the steps may leave out.
+        for at in (0..size).step_by(64) {
+            _mm_prefetch::<_MM_HINT_T0>(first.add(at));
+        }
+        _mm_prefetch::<_MM_HINT_T0>(first.add(size.max(1) - 1));
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = value;

@@ -243,6 +243,18 @@ macro_rules! define_leaves {
                 }
             }
 
+            /// Asks the cache for the pack of the leaf `child`, if it holds one.
+            #[inline(always)]
+            pub fn prefetch(&self, child: ChildRef) {
+                let (code, _, index) = leaf_parts(child);
+                match code {
+                    $(c if c == const { pack_code(PrimKind::$kind) } => {
+                        crate::simd::prefetch(&self.$field.packs[index])
+                    })*
+                    _ => {}
+                }
+            }
+
             /// The ids of the pack of the leaf `child`, lane by lane.
             #[cfg(test)]
             pub fn ids(&self, child: ChildRef) -> &[PrimId; 8] {

@@ -87,6 +87,7 @@ impl Bvh8 {
                 let hit = intervals.hit & kept;
                 if hit.any() {
                     let nearest = hit.select(intervals.entry, F32xP::splat(f32::INFINITY));
+                    self.prefetch_pack(node.child[c]);
                     let entry = (node.child[c], hit.bitmask(), nearest.min_lane());
                     stack.push_sorted(floor, entry, |e| e.2);
                 }
