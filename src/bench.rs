@@ -5,6 +5,7 @@
 use std::time::{Duration, Instant};
 
 use bumpalo::Bump;
+use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::accel::count::{Count, CountLanes, Counter, NoCount, Tally, SHARE};
@@ -426,10 +427,11 @@ fn trace_packet<C: Count>(
     let active = lane_mask(|k| block[k] != IDLE);
     // Idle lanes carry a copy of the first ray and are masked off.
     let lane = |k: usize| if block[k] == IDLE { block[0] } else { block[k] } as usize;
-    let rays = std::array::from_fn(|k| set.rays[lane(k)]);
-    let packet = RayPacket::new(&rays)
-        .with_t_max(std::array::from_fn(|k| set.t_max[lane(k)]))
-        .with_active(active);
+    let (mut rays, mut t_max) = ([Ray::new(Vec3::ZERO, Vec3::ZERO); PACKET], [0.0; PACKET]);
+    for k in 0..PACKET {
+        (rays[k], t_max[k]) = (set.rays[lane(k)], set.t_max[lane(k)]);
+    }
+    let packet = RayPacket::new(&rays).with_t_max(t_max).with_active(active);
     let mut count = C::Lanes::default();
     let answers = if set.occlusion {
         let blocked = tracer.occluded_packet_counting::<C>(&packet, &mut count);

@@ -65,13 +65,13 @@ pub fn lane_mask(mut pred: impl FnMut(usize) -> bool) -> LaneBits {
 impl<'r> RayPacket<'r> {
     /// The rays, every lane active over `(0, inf)`.
     pub fn new(rays: &'r [Ray; PACKET]) -> Self {
-        let dir = Vec3xP::from_lanes(rays.map(|r| r.dir));
+        let dir = Vec3xP::from_fn(|k| rays[k].dir);
         RayPacket {
             rays,
-            origin: Vec3xP::from_lanes(rays.map(|r| r.origin)),
+            origin: Vec3xP::from_fn(|k| rays[k].origin),
             dir,
             inv_dir: dir.recip(),
-            time: F32xP::from_array(rays.map(|r| r.time)),
+            time: F32xP::from_array(std::array::from_fn(|k| rays[k].time)),
             t_min: 0.0,
             t_max: [f32::INFINITY; PACKET],
             active: LaneBits::first(PACKET),

@@ -800,11 +800,7 @@ macro_rules! lanes {
             /// Lane `i` from `lanes[i]`.
             #[inline]
             pub fn from_lanes(lanes: [Vec3; $n]) -> Self {
-                Vec3Lanes {
-                    x: $floats::from_array(lanes.map(|v| v.x)),
-                    y: $floats::from_array(lanes.map(|v| v.y)),
-                    z: $floats::from_array(lanes.map(|v| v.z)),
-                }
+                Self::from_fn(|i| lanes[i])
             }
         }
     };
