@@ -79,8 +79,10 @@ impl<'r> RayPacket<'r> {
     }
 
     /// The packet with only the lanes `active` asked.
-    pub fn with_active(self, active: LaneBits) -> Self {
-        RayPacket { active, ..self }
+    #[inline(always)]
+    pub fn with_active(mut self, active: LaneBits) -> Self {
+        self.active = active;
+        self
     }
 
     /// [`RayPacket::with_active`] made in `copy`, or the packet itself where `active` are
@@ -95,8 +97,10 @@ impl<'r> RayPacket<'r> {
     }
 
     /// The packet with lane `i` asked within `(t_min, t_max[i])`.
-    pub fn with_t_max(self, t_max: [f32; PACKET]) -> Self {
-        RayPacket { t_max, ..self }
+    #[inline(always)]
+    pub fn with_t_max(mut self, t_max: [f32; PACKET]) -> Self {
+        self.t_max = t_max;
+        self
     }
 
     /// The lanes whose ray [`Ray::is_traceable`] (its lane-wise twin), as a bit mask.
