@@ -95,10 +95,10 @@ impl Structure for Bvh8 {
 }
 
 impl Bvh8 {
-    /// Asks the cache for the pack of `child` if it is a pack leaf. The closest-hit walks
-    /// ask as they push a child: a pack leaf (eight lines) read cold stalls the test that
-    /// reads it, and one pushed is most often entered. The occlusion walks do not ask:
-    /// they stop at the first blocker, and asking cost them more than it saved.
+    /// Asks the cache for the pack of `child` if it is a pack leaf. The walks ask as they
+    /// push a child: a pack (eight lines) read cold stalls the test that reads it, and
+    /// one pushed is most often entered. The single-ray occlusion walk does not ask: it
+    /// gained nothing measurable there.
     #[inline(always)]
     fn prefetch_pack(&self, child: ChildRef) {
         if child & LEAF != 0 {

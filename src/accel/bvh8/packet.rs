@@ -160,6 +160,7 @@ impl Bvh8 {
                 let intervals = box_rays.interval(min, max, lanes_t_min, lanes_t_max);
                 let hit = intervals.hit.bitmask() & lanes;
                 if hit != 0 {
+                    self.prefetch_pack(node.child[c]);
                     stack.push((node.child[c], hit));
                 }
             });
