@@ -132,6 +132,19 @@ impl<K: LeafPack> Packs<K> {
     }
 }
 
+/// Whether a pack of `count` primitives is tested one primitive against the lanes `lanes`
+/// at a time, rather than one lane against its eight slots at a time: where that makes
+/// fewer tests, weighed by what each costs. At 8 lanes the two tests cost alike; a test
+/// of 16 lanes costs about one and a half of a pack's 8 (Zen 4 runs it as two halves,
+/// which share its set-up): weighing them alike there, or 2 to 1, was slower (`bench`,
+/// EPYC-512, best paths: dragon reflection -1.5%, mount_very_high reflection -2%; 2 to 1,
+/// mount_very_high primary -5%). Full-width AVX-512 is not measured.
+#[inline(always)]
+fn by_primitive(count: usize, lanes: LaneBits) -> bool {
+    let (primitive, lane) = if PACKET == 16 { (3, 2) } else { (1, 1) };
+    count * primitive < lanes.count_ones() as usize * lane
+}
+
 /// How many packs of each packed kind a tree holds, by [`pack_code`] less one.
 pub type PackCounts = [usize; PrimKind::PACKED.len()];
 
@@ -197,10 +210,9 @@ macro_rules! define_leaves {
             }
 
             /// [`Packs::closest_packet`] for the leaf `child` and the lanes `lanes` of
-            /// `query`'s packet when `child` is a pack of fewer primitives than `lanes`
-            /// has lanes: then testing each primitive against all lanes makes fewer
-            /// 8-lane tests than testing each lane against every slot. `false`
-            /// otherwise, the lanes left untested.
+            /// `query`'s packet when testing each of its primitives against all lanes
+            /// costs less than testing each lane against every slot ([`by_primitive`]).
+            /// `false` otherwise, the lanes left untested.
             #[inline(always)]
             pub fn closest_packet<C>(
                 &self,
@@ -211,7 +223,7 @@ macro_rules! define_leaves {
                 counted: &mut impl CountLanes<C>,
             ) -> bool {
                 let (code, count, index) = leaf_parts(child);
-                let fewer = count < lanes.count_ones() as usize;
+                let fewer = by_primitive(count, lanes);
                 match code {
                     $(c if fewer && c == const { pack_code(PrimKind::$kind) } => {
                         self.$field.closest_packet((index, count), query, lanes, closest, counted);
@@ -222,9 +234,8 @@ macro_rules! define_leaves {
             }
 
             /// [`Packs::blocks_packet`] for the leaf `child` and the lanes `lanes` of
-            /// `query`'s packet when `child` is a pack of fewer primitives than `lanes`
-            /// has lanes (as [`Leaves::closest_packet`]); `None` otherwise, the lanes left
-            /// untested.
+            /// `query`'s packet when that costs less ([`by_primitive`]); `None` otherwise,
+            /// the lanes left untested.
             #[inline(always)]
             pub fn blocks_packet<C>(
                 &self,
@@ -234,7 +245,7 @@ macro_rules! define_leaves {
                 counted: &mut impl CountLanes<C>,
             ) -> Option<LaneBits> {
                 let (code, count, index) = leaf_parts(child);
-                let fewer = count < lanes.count_ones() as usize;
+                let fewer = by_primitive(count, lanes);
                 match code {
                     $(c if fewer && c == const { pack_code(PrimKind::$kind) } => {
                         Some(self.$field.blocks_packet((index, count), query, lanes, counted))
