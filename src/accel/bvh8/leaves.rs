@@ -134,16 +134,24 @@ impl<K: LeafPack> Packs<K> {
 
 /// Whether a pack of `count` primitives is tested one primitive against the lanes `lanes`
 /// at a time, rather than one lane against its eight slots at a time: where that makes
-/// fewer tests, weighed by what each costs. At 8 lanes the two tests cost alike; a test
-/// of 16 lanes costs about one and a half of a pack's 8 (Zen 4 runs it as two halves,
-/// which share its set-up): weighing them alike there, or 2 to 1, was slower (`bench`,
-/// EPYC-512, best paths: dragon reflection -1.5%, mount_very_high reflection -2%; 2 to 1,
-/// mount_very_high primary -5%). Full-width AVX-512 is not measured.
+/// fewer tests, weighed by what each costs (`(primitive, lane)`, [`CLOSEST_WEIGHTS`] or
+/// [`OCCLUSION_WEIGHTS`]).
 #[inline(always)]
-fn by_primitive(count: usize, lanes: LaneBits) -> bool {
-    let (primitive, lane) = if PACKET == 16 { (3, 2) } else { (1, 1) };
+fn by_primitive(count: usize, lanes: LaneBits, (primitive, lane): (usize, usize)) -> bool {
     count * primitive < lanes.count_ones() as usize * lane
 }
+
+/// [`by_primitive`]'s weights in closest-hit leaves. At 8 lanes the two tests cost alike;
+/// a test of 16 lanes costs about one and a half of a pack's 8 (Zen 4 runs it as two
+/// halves, which share its set-up): weighed alike there, or 2 to 1, it was slower
+/// (`bench`, EPYC-512, best paths: dragon reflection -1.5%, mount_very_high reflection
+/// -2%; 2 to 1, mount_very_high primary -5%). Full-width AVX-512 is not measured.
+const CLOSEST_WEIGHTS: (usize, usize) = if PACKET == 16 { (3, 2) } else { (1, 1) };
+
+/// [`by_primitive`]'s weights in occlusion leaves: two thirds of the closest-hit ones, as
+/// a primitive's test there leaves out the lanes already blocked and the pack's loop
+/// stops once all are (at 8 lanes, weighed alike: mount_very_high shadow -3.5%).
+const OCCLUSION_WEIGHTS: (usize, usize) = if PACKET == 16 { (1, 1) } else { (2, 3) };
 
 /// How many packs of each packed kind a tree holds, by [`pack_code`] less one.
 pub type PackCounts = [usize; PrimKind::PACKED.len()];
@@ -223,7 +231,7 @@ macro_rules! define_leaves {
                 counted: &mut impl CountLanes<C>,
             ) -> bool {
                 let (code, count, index) = leaf_parts(child);
-                let fewer = by_primitive(count, lanes);
+                let fewer = by_primitive(count, lanes, CLOSEST_WEIGHTS);
                 match code {
                     $(c if fewer && c == const { pack_code(PrimKind::$kind) } => {
                         self.$field.closest_packet((index, count), query, lanes, closest, counted);
@@ -245,7 +253,7 @@ macro_rules! define_leaves {
                 counted: &mut impl CountLanes<C>,
             ) -> Option<LaneBits> {
                 let (code, count, index) = leaf_parts(child);
-                let fewer = by_primitive(count, lanes);
+                let fewer = by_primitive(count, lanes, OCCLUSION_WEIGHTS);
                 match code {
                     $(c if fewer && c == const { pack_code(PrimKind::$kind) } => {
                         Some(self.$field.blocks_packet((index, count), query, lanes, counted))
