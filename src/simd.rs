@@ -161,7 +161,7 @@ pub fn prefetch<T>(value: &T) {
     unsafe {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
         let (first, size) = ((value as *const T).cast::<i8>(), std::mem::size_of::<T>());
-        // A line a 64 bytes, and the last byte, whose line the steps may leave out.
+        // An address every 64 bytes (a line), and the last byte, whose line they may miss.
         for at in (0..size).step_by(64) {
             _mm_prefetch::<_MM_HINT_T0>(first.add(at));
         }

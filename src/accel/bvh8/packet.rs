@@ -2,9 +2,10 @@
 //! by its [`RayRange`] (one test of the eight boxes), those left tested against all the
 //! packet's rays at once, a subtree left with few lanes finished one ray at a time by
 //! `traverse.rs`, so each lane's answer is the single ray's bit for bit. A leaf of packed
-//! primitives holding fewer of them than the packet brings lanes (SAH leaves hold two on
-//! average) tests each primitive against all the lanes at once, by the primitives' packet
-//! kernels, rather than each lane against all eight slots of the pack.
+//! primitives holding few of them against the lanes the packet brings (SAH leaves hold
+//! two on average; `leaves.rs` weighs the two tests) tests each primitive against all the
+//! lanes at once, by the primitives' packet kernels, rather than each lane against all
+//! eight slots of the pack.
 
 use super::node::{ChildRef, Node8, LEAF};
 use super::{Bvh8, STACK_SIZE};
