@@ -262,13 +262,17 @@ macro_rules! define_leaves {
                 }
             }
 
-            /// Asks the cache for the pack of the leaf `child`, if it holds one.
+            /// Asks the cache for the pack of the leaf `child`, if it holds one, and with
+            /// `ids` for its primitives' ids too (which a closest hit reads).
             #[inline(always)]
-            pub fn prefetch(&self, child: ChildRef) {
+            pub fn prefetch(&self, child: ChildRef, ids: bool) {
                 let (code, _, index) = leaf_parts(child);
                 match code {
                     $(c if c == const { pack_code(PrimKind::$kind) } => {
-                        crate::simd::prefetch(&self.$field.packs[index])
+                        crate::simd::prefetch(&self.$field.packs[index]);
+                        if ids {
+                            crate::simd::prefetch(&self.$field.ids[index]);
+                        }
                     })*
                     _ => {}
                 }

@@ -87,7 +87,7 @@ impl Bvh8 {
             // The hit children sorted on the stack, the nearest on top to be popped next.
             let floor = stack.len();
             for_lanes(hits, |k| {
-                self.prefetch_pack(node.child[k]);
+                self.prefetch_pack(node.child[k], true);
                 stack.push_sorted(floor, (node.child[k], entries[k]), |e| e.1)
             });
         }
