@@ -142,10 +142,11 @@ fn by_primitive(count: usize, lanes: LaneBits, (primitive, lane): (usize, usize)
 }
 
 /// [`by_primitive`]'s weights in closest-hit leaves. At 8 lanes the two tests cost alike;
-/// a test of 16 lanes costs about one and a half of a pack's 8 (Zen 4 runs it as two
-/// halves, which share its set-up): weighed alike there, or 2 to 1, it was slower
-/// (`bench`, EPYC-512, best paths: dragon reflection -1.5%, mount_very_high reflection
-/// -2%; 2 to 1, mount_very_high primary -5%). Full-width AVX-512 is not measured.
+/// a primitive's test of 16 lanes costs about one and a half of a lane's 8-slot test
+/// (Zen 4 runs it as two halves, which share its set-up): weighed alike there, or 2 to
+/// 1, it was slower (`bench`, EPYC-512, best paths: dragon reflection -1.5%,
+/// mount_very_high reflection -2%; 2 to 1, mount_very_high primary -5%). Full-width
+/// AVX-512 is not measured.
 const CLOSEST_WEIGHTS: (usize, usize) = if PACKET == 16 { (3, 2) } else { (1, 1) };
 
 /// [`by_primitive`]'s weights in occlusion leaves: two thirds of the closest-hit ones, as
