@@ -17,7 +17,7 @@ use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::render::light::{emitters, Receiver};
 use crate::render::sampler::{Sample, SampleGrid, SampleRng};
 use crate::scene::Scene;
-use crate::simd::PACKET;
+use crate::simd::{Bits, PACKET};
 
 /// The protocol's image width; the height follows the scene's aspect ratio.
 pub const WIDTH: u32 = 1024;
@@ -429,13 +429,14 @@ fn trace_packet<C: Count>(
     let lane = |k: usize| if block[k] == IDLE { block[0] } else { block[k] } as usize;
     let (mut rays, mut t_max) = ([Ray::new(Vec3::ZERO, Vec3::ZERO); PACKET], [0.0; PACKET]);
     for k in 0..PACKET {
-        (rays[k], t_max[k]) = (set.rays[lane(k)], set.t_max[lane(k)]);
+        let i = lane(k);
+        (rays[k], t_max[k]) = (set.rays[i], set.t_max[i]);
     }
     let packet = RayPacket::new(&rays).with_t_max(t_max).with_active(active);
     let mut count = C::Lanes::default();
     let answers = if set.occlusion {
         let blocked = tracer.occluded_packet_counting::<C>(&packet, &mut count);
-        std::array::from_fn(|k| if blocked & (1 << k) != 0 { 0.0 } else { -1.0 })
+        std::array::from_fn(|k| if blocked.has(k) { 0.0 } else { -1.0 })
     } else {
         let hits = tracer.closest_packet_counting::<C>(&packet, &mut count);
         hits.map(|h| h.map_or(-1.0, |h| h.t))

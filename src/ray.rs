@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use crate::prim::PrimId;
-use crate::simd::{Bits, F32xP, LaneBits, Vec3xP, PACKET};
+use crate::simd::{Bits, F32xP, Floats, LaneBits, Vec3xP, PACKET};
 
 /// A ray `origin + t * dir`. `dir` is unit length wherever the renderer makes rays: the
 /// intersection routines rely on it (the sphere test skips the `dot(d, d)` term).
@@ -71,7 +71,7 @@ impl<'r> RayPacket<'r> {
             origin: Vec3xP::from_fn(|k| rays[k].origin),
             dir,
             inv_dir: dir.recip(),
-            time: F32xP::from_array(std::array::from_fn(|k| rays[k].time)),
+            time: F32xP::from_fn(|k| rays[k].time),
             t_min: 0.0,
             t_max: [f32::INFINITY; PACKET],
             active: LaneBits::first(PACKET),

@@ -27,7 +27,7 @@ use crate::intersect::{beyond, widen_entry, widen_exit, Aabb, BoxRay, PacketQuer
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::scene::Geometry;
-use crate::simd::{for_lanes, F32xP, LaneBits, PACKET};
+use crate::simd::{for_lanes, Bits, F32xP, LaneBits, PACKET};
 
 /// The report's `m`.
 pub const DEFAULT_DENSITY: f32 = 2.0;
@@ -324,7 +324,7 @@ impl Structure for Grid {
                 }
             });
             for (k, walk) in walks.iter_mut().enumerate() {
-                self.step(walk, blocked & (1 << k) != 0, &mut || count.cell(1 << k));
+                self.step(walk, blocked.has(k), &mut || count.cell(1 << k));
             }
         }
     }
@@ -380,7 +380,9 @@ impl Grid {
             count.boxes(packet.active, 1);
         }
         std::array::from_fn(|k| {
-            (packet.active & (1 << k) != 0)
+            packet
+                .active
+                .has(k)
                 .then(|| Dda::start(self, &rays[k], inv_dir[k], t_min, t_max[k]))
                 .flatten()
                 .and_then(|mut dda| {

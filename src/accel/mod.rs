@@ -381,11 +381,7 @@ impl<'s> Tracer<'s> {
         }
         // As `closest` for each lane: a plane must be closer than the structure's hit.
         let planes = self.closest_planes(&query, active, closest.map(|c| c.limit()), count);
-        std::array::from_fn(|k| {
-            (active & (1 << k) != 0)
-                .then(|| planes[k].or(bounded[k]))
-                .flatten()
-        })
+        std::array::from_fn(|k| active.has(k).then(|| planes[k].or(bounded[k])).flatten())
     }
 
     /// The active lanes of `packet` whose ray is blocked within its interval, as a bit

@@ -6,7 +6,7 @@ use super::hit::ClosestHit;
 use crate::intersect::{PacketQuery, RayQuery};
 use crate::ray::lane_mask;
 use crate::scene::Geometry;
-use crate::simd::{for_lanes, LaneBits, PACKET};
+use crate::simd::{for_lanes, Bits, LaneBits, PACKET};
 
 /// An acceleration structure's queries, each answered as brute force answers it
 /// (`accel::ClosestHit`'s tie rule), each counting its work into a [`Count`] (nothing, for
@@ -57,7 +57,7 @@ pub trait Structure {
     ) -> LaneBits {
         let packet = query.packet;
         lane_mask(|k| {
-            packet.active & (1 << k) != 0 && {
+            packet.active.has(k) && {
                 let mut lane = C::default();
                 let blocked = self.occluded(geometry, &query.lane(k), packet.t_max[k], &mut lane);
                 count.add_lane(k, &lane);

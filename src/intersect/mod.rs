@@ -56,7 +56,7 @@ pub type PacketHits = TriangleHits<F32xP>;
 use glam::Vec3;
 
 use crate::ray::{Ray, RayPacket};
-use crate::simd::{F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3x8};
+use crate::simd::{Bits, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3x8};
 
 /// The storage of one primitive kind, and what the layers above ask of a primitive `i`
 /// of it. Implemented in the kind's own file; [`crate::scene::Geometry`] dispatches to it.
@@ -96,7 +96,8 @@ pub trait Shapes {
     ) -> PacketHits {
         let t_max = t_max.to_array();
         PacketHits::from_lanes(std::array::from_fn(|k| {
-            (active & (1 << k) != 0)
+            active
+                .has(k)
                 .then(|| self.intersect(i, &query.lane(k), t_max[k]))
                 .flatten()
         }))

@@ -230,7 +230,7 @@ impl PacketHits {
     /// The hit of each lane (a miss's lanes zero).
     pub fn from_lanes(hits: [Option<TriangleHit>; PACKET]) -> Self {
         let lane = |field: fn(&TriangleHit) -> f32| {
-            F32xP::from_array(hits.map(|h| h.as_ref().map_or(0.0, field)))
+            F32xP::from_fn(|k| hits[k].as_ref().map_or(0.0, field))
         };
         TriangleHits {
             hit: MaskP::from_bitmask(lane_mask(|k| hits[k].is_some())),
