@@ -32,10 +32,10 @@ use std::time::{Duration, Instant};
 
 use crate::intersect::{IntersectOptions, PacketQuery, RayQuery, SphereRoots};
 use crate::prim::PrimKind;
-use crate::ray::{lane_mask, Hit, Ray, RayPacket};
+use crate::ray::{Hit, Ray, RayPacket};
 pub use crate::scene::AccelKind;
 use crate::scene::Geometry;
-use crate::simd::{Bits, LaneBits, PACKET};
+use crate::simd::{Bits, F32xP, LaneBits, PACKET};
 use bvh2::Bvh2;
 pub use bvh2::BvhBuild;
 use bvh8::Bvh8;
@@ -403,8 +403,7 @@ impl<'s> Tracer<'s> {
         let options = self.options;
         let by_plane = if self.has_unbounded() {
             let query = PacketQuery { packet, options };
-            let planes = self.closest_planes(&query, active, packet.t_max, count);
-            lane_mask(|k| planes[k].is_some())
+            self.blocking_planes(&query, active, count)
         } else {
             0
         };
@@ -436,6 +435,30 @@ impl<'s> Tracer<'s> {
             }
         }
         closest.map(|c| c.hit())
+    }
+
+    /// The lanes `lanes` of `query`'s packet that an unbounded primitive (a plane) blocks
+    /// within their interval: those in which [`Tracer::closest_planes`] finds a hit,
+    /// found without keeping the closest (a lane is done at its first plane hit).
+    fn blocking_planes<C>(
+        &self,
+        query: &PacketQuery,
+        lanes: LaneBits,
+        count: &mut impl CountLanes<C>,
+    ) -> LaneBits {
+        let t_max = F32xP::from_array(query.packet.t_max);
+        let mut blocked: LaneBits = 0;
+        for kind in PrimKind::UNBOUNDED {
+            count.prims(lanes, self.geometry.count(kind) as u32);
+            for prim in self.geometry.ids(kind) {
+                let open = lanes & !blocked;
+                if open != 0 {
+                    let hits = self.geometry.intersect_packet(prim, query, t_max, open);
+                    blocked |= hits.hit.bitmask() & open;
+                }
+            }
+        }
+        blocked
     }
 
     /// Whether the geometry holds unbounded primitives (planes), which no structure holds
