@@ -345,7 +345,7 @@ impl<'s> Tracer<'s> {
             return false;
         }
         let query = RayQuery::new(ray, t_min, self.options);
-        self.closest_plane(&query, t_max, count).is_some()
+        self.blocking_plane(&query, t_max, count)
             || self.accel.occluded(self.geometry, &query, t_max, count)
     }
 
@@ -457,6 +457,18 @@ impl<'s> Tracer<'s> {
                     blocked |= hits.hit.bitmask() & open;
                 }
             }
+        }
+        blocked
+    }
+
+    /// Whether an unbounded primitive (a plane) blocks `query` within `(t_min, t_max)`:
+    /// whether [`Tracer::closest_plane`] finds a hit, found without keeping the closest.
+    fn blocking_plane(&self, query: &RayQuery, t_max: f32, count: &mut impl Count) -> bool {
+        let mut blocked = false;
+        for kind in PrimKind::UNBOUNDED {
+            count.prims(self.geometry.count(kind) as u32);
+            let hits = |prim| self.geometry.intersect(prim, query, t_max).is_some();
+            blocked = blocked || self.geometry.ids(kind).any(hits);
         }
         blocked
     }
