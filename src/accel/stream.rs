@@ -4,7 +4,8 @@
 //! path (`bench.rs`) both trace through it.
 //!
 //! Closest-hit queries go in the order they come: the renderer's queues keep a tile's
-//! rays together, the protocol's sets their pixel blocks. Occlusion queries are grouped by
+//! rays together (and side by side, read in place: [`closest_rays_counting`]), the
+//! protocol's sets their pixel blocks. Occlusion queries are grouped by
 //! the light they head for ([`Occlusions`]), in their order within each light, so that a
 //! packet's rays share an end point. Both are packed a packet at a time by [`Packer`], which
 //! traces a packet as soon as it is full: the renderer's shadow rays, made light by light,
@@ -80,6 +81,33 @@ pub fn closest_counting<Q: Query, C: Count>(
         },
         |lanes, (found, count)| hits(lanes, &found[..lanes.len()], &count),
     );
+}
+
+/// [`closest_counting`] for rays stored side by side over their whole length (the
+/// renderer's queues): each full packet's rays are read where they lie, as a copy of
+/// them, stored just before the packet reads them lane by lane, stalls on store
+/// forwarding.
+#[inline(never)]
+pub fn closest_rays_counting<C: Count>(
+    tracer: &Tracer,
+    rays: &[Ray],
+    mut hits: impl FnMut(&[Option<Hit>], &C::Lanes),
+) {
+    for chunk in rays.chunks(PACKET) {
+        // A partial packet's missing lanes repeat its first ray and are inactive.
+        let padded: [Ray; PACKET];
+        let lanes: &[Ray; PACKET] = match chunk.try_into() {
+            Ok(full) => full,
+            Err(_) => {
+                padded = std::array::from_fn(|k| *chunk.get(k).unwrap_or(&chunk[0]));
+                &padded
+            }
+        };
+        let packet = RayPacket::new(lanes).with_active(LaneBits::first(chunk.len()));
+        let mut count = C::Lanes::default();
+        let found = tracer.closest_packet_counting::<C>(&packet, &mut count);
+        hits(&found[..chunk.len()], &count);
+    }
 }
 
 /// A stream of occlusion queries, each pushed with the light it heads for, traced grouped

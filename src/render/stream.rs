@@ -164,7 +164,7 @@ fn shade_depth<'a, C: Count>(
     let mut hits = ArenaVec::with_capacity_in(n, arena);
     let geometry = &shader.tracer.geometry;
     let (work, reflected) = (&mut queue.work, queue.reflected);
-    stream::closest_counting::<_, C>(shader.tracer, &queue.rays, |_, found, lanes| {
+    stream::closest_rays_counting::<C>(shader.tracer, &queue.rays, |found, lanes| {
         if C::ON {
             for k in 0..found.len() {
                 let mut own = Work::default();
@@ -192,7 +192,7 @@ fn shade_depth<'a, C: Count>(
             }
         }
     }
-    let blocks = blocks.finish(shader, &queue.rays);
+    let blocks = blocks.finish(shader);
     let shadows = ShadowQueue::trace(shader, arena, queue, &blocks);
     rays.shadow += shadows.traced;
     for (b, block) in blocks.iter().enumerate() {
@@ -301,14 +301,19 @@ struct HitBlock {
 }
 
 impl HitBlock {
-    /// The block of the hits `hits` of the rays `ray` (indices into `rays`), whose first
-    /// `count` lanes are hits and whose others repeat lane 0: the points recomputed on the
+    /// The block of the hits `hits` of the rays `rays` (at the indices `ray` of the
+    /// depth's queue), whose first `count` lanes are hits and whose others repeat lane 0: the points recomputed on the
     /// surfaces ([`Shader::hit_points8`]) and the normals turned to face the rays, as
     /// [`Shader::hit_point`] turns them.
-    fn new(shader: &Shader, rays: &[Ray], ray: [u32; 8], hits: &[Hit; 8], count: usize) -> Self {
-        let lane_rays = ray.map(|i| rays[i as usize]);
-        let surface = shader.hit_points8(&lane_rays, hits);
-        let dir = Vec3x8::from_lanes(lane_rays.map(|r| r.dir));
+    fn new(
+        shader: &Shader,
+        rays: &[Ray; 8],
+        ray: &[u32; 8],
+        hits: &[Hit; 8],
+        count: usize,
+    ) -> Self {
+        let surface = shader.hit_points8(rays, hits);
+        let dir = Vec3x8::from_fn(|k| rays[k].dir);
         let inside = dir.dot(surface.normal).gt(F32x8::ZERO);
         let nf = inside.select_vec(-surface.normal, surface.normal);
         let geometry = &shader.tracer.geometry;
@@ -316,7 +321,7 @@ impl HitBlock {
             lanes: ((1u16 << count) - 1) as u8,
             inside: inside.bitmask(),
             bounded: shader.options.profile == Profile::Standard,
-            ray,
+            ray: *ray,
             material: hits.map(|h| geometry.material(h.prim)),
             point: surface.point,
             nf,
@@ -344,9 +349,12 @@ impl HitBlock {
 /// A depth's hits gathered into [`HitBlock`]s, in queue order.
 struct HitBlocks<'a> {
     blocks: ArenaVec<'a, HitBlock>,
-    /// The hits of the block being gathered, and their rays' indices in the queue.
+    /// The hits of the block being gathered, their rays' indices in the queue, and the
+    /// rays, each stored in place as it comes: an array built whole and moved is copied
+    /// in wide loads that wait on the narrow stores just made (no store forwarding).
     ray: [u32; 8],
     hits: [Hit; 8],
+    rays: [Ray; 8],
     filled: usize,
 }
 
@@ -363,6 +371,7 @@ impl<'a> HitBlocks<'a> {
             blocks: ArenaVec::with_capacity_in(hits.div_ceil(8), arena),
             ray: [0; 8],
             hits: [none; 8],
+            rays: [Ray::new(Vec3::ZERO, Vec3::ZERO); 8],
             filled: 0,
         }
     }
@@ -371,28 +380,29 @@ impl<'a> HitBlocks<'a> {
     fn push(&mut self, shader: &Shader, rays: &[Ray], ray: u32, hit: Hit) {
         self.ray[self.filled] = ray;
         self.hits[self.filled] = hit;
+        self.rays[self.filled] = rays[ray as usize];
         self.filled += 1;
         if self.filled == 8 {
-            self.close(shader, rays);
+            self.close(shader);
         }
     }
 
     /// Makes the hits gathered a block, its free lanes repeating its lane 0.
-    fn close(&mut self, shader: &Shader, rays: &[Ray]) {
+    fn close(&mut self, shader: &Shader) {
         let count = self.filled;
         if count == 0 {
             return;
         }
         for k in count..8 {
-            (self.ray[k], self.hits[k]) = (self.ray[0], self.hits[0]);
+            (self.ray[k], self.hits[k], self.rays[k]) = (self.ray[0], self.hits[0], self.rays[0]);
         }
-        let block = HitBlock::new(shader, rays, self.ray, &self.hits, count);
+        let block = HitBlock::new(shader, &self.rays, &self.ray, &self.hits, count);
         self.blocks.push(block);
         self.filled = 0;
     }
 
-    fn finish(mut self, shader: &Shader, rays: &[Ray]) -> ArenaVec<'a, HitBlock> {
-        self.close(shader, rays);
+    fn finish(mut self, shader: &Shader) -> ArenaVec<'a, HitBlock> {
+        self.close(shader);
         self.blocks
     }
 }

@@ -386,6 +386,17 @@ proptest! {
                 counted_hits.extend_from_slice(found)
             });
             prop_assert_eq!(&counted_hits, &hits);
+            // Rays side by side (the renderer's queues), each over its whole length.
+            let rays: Vec<Ray> = queries.iter().map(|&(Bounded(ray, _), _)| ray).collect();
+            let mut whole = Vec::new();
+            stream::closest_rays_counting::<NoCount>(&tracer, &rays, |found, _| {
+                whole.extend_from_slice(found)
+            });
+            prop_assert_eq!(whole.len(), rays.len());
+            for (k, ray) in rays.iter().enumerate() {
+                let expected = brute.closest(ray, 0.0, f32::INFINITY);
+                prop_assert_eq!(whole[k], expected, "{} ray {} side by side", name, k);
+            }
             let (counted_blocked, counts) = occlusions.trace::<Tally>(&tracer, &arena);
             prop_assert_eq!(counted_blocked, blocked);
             for (k, &(Bounded(ray, _), _)) in queries.iter().enumerate() {
