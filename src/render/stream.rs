@@ -29,27 +29,40 @@ use crate::prim::{PrimId, PrimKind};
 use crate::ray::{Hit, Ray};
 use crate::simd::{for_lanes, F32x8, Mask8, Vec3x8};
 
-/// The rays of one depth, and what they bring back.
+/// The rays of one depth, and what they bring back. The rays lie side by side, as the
+/// scheduler reads them; what else a ray carries is one record (a push each, not one a
+/// field: the pushes were a twentieth of a render's instructions).
 pub(super) struct Queue<'a, C> {
     rays: ArenaVec<'a, Ray>,
-    samples: ArenaVec<'a, Sample>,
-    /// The index of the medium each ray travels in.
-    ior: ArenaVec<'a, f32>,
-    /// At depth 1 the tile's pixel of each sample; deeper, the index in the previous
-    /// depth's queue of the hit that spawned the ray.
-    parent: ArenaVec<'a, u32>,
-    /// The factor of each ray's colour in its parent's (one at depth 1).
-    weight: ArenaVec<'a, Vec3>,
-    /// What each ray sees: the background if it missed; else its hit's local colour, to
-    /// which its children's colours are added before it is clamped.
-    colour: ArenaVec<'a, Vec3>,
-    /// Whether each ray hit something (only hits clamp their colour).
-    hit: ArenaVec<'a, bool>,
+    lineage: ArenaVec<'a, Lineage>,
+    seen: ArenaVec<'a, Seen>,
     /// Below depth 1, the rays before this index are reflected, the others transmitted.
     reflected: usize,
     /// Where the render counts, each ray's work by kind: its own, its shadow rays' and
     /// its children's, added as they are traced; empty otherwise.
     work: ArenaVec<'a, Work<C>>,
+}
+
+/// Where a queued ray comes from, and how its colour counts there.
+#[derive(Clone, Copy)]
+struct Lineage {
+    sample: Sample,
+    /// The index of the medium the ray travels in.
+    ior: f32,
+    /// At depth 1 the tile's pixel of the sample; deeper, the index in the previous
+    /// depth's queue of the hit that spawned the ray.
+    parent: u32,
+    /// The factor of the ray's colour in its parent's (one at depth 1).
+    weight: Vec3,
+}
+
+/// What a traced ray sees: the background if it missed; else its hit's local colour, to
+/// which its children's colours are added before it is clamped.
+#[derive(Clone, Copy)]
+struct Seen {
+    colour: Vec3,
+    /// Whether the ray hit something (only hits clamp their colour).
+    hit: bool,
 }
 
 impl<'a, C: Count> Queue<'a, C> {
@@ -58,12 +71,8 @@ impl<'a, C: Count> Queue<'a, C> {
     pub(super) fn with_capacity_in(capacity: usize, arena: &'a Bump) -> Self {
         Queue {
             rays: ArenaVec::with_capacity_in(capacity, arena),
-            samples: ArenaVec::with_capacity_in(capacity, arena),
-            ior: ArenaVec::with_capacity_in(capacity, arena),
-            parent: ArenaVec::with_capacity_in(capacity, arena),
-            weight: ArenaVec::with_capacity_in(capacity, arena),
-            colour: ArenaVec::with_capacity_in(capacity, arena),
-            hit: ArenaVec::with_capacity_in(capacity, arena),
+            lineage: ArenaVec::with_capacity_in(capacity, arena),
+            seen: ArenaVec::with_capacity_in(capacity, arena),
             reflected: 0,
             work: ArenaVec::with_capacity_in(if C::ON { capacity } else { 0 }, arena),
         }
@@ -76,10 +85,12 @@ impl<'a, C: Count> Queue<'a, C> {
 
     fn push(&mut self, ray: Ray, sample: Sample, ior: f32, parent: u32, weight: Vec3) {
         self.rays.push(ray);
-        self.samples.push(sample);
-        self.ior.push(ior);
-        self.parent.push(parent);
-        self.weight.push(weight);
+        self.lineage.push(Lineage {
+            sample,
+            ior,
+            parent,
+            weight,
+        });
     }
 
     fn len(&self) -> usize {
@@ -89,18 +100,16 @@ impl<'a, C: Count> Queue<'a, C> {
     /// Queues the rays of `other` (not yet traced) after its own.
     fn append(&mut self, other: &Queue<C>) {
         self.rays.extend_from_slice(&other.rays);
-        self.samples.extend_from_slice(&other.samples);
-        self.ior.extend_from_slice(&other.ior);
-        self.parent.extend_from_slice(&other.parent);
-        self.weight.extend_from_slice(&other.weight);
+        self.lineage.extend_from_slice(&other.lineage);
     }
 
     /// Ray `i`'s colour as its parent takes it.
-    fn seen(&self, i: usize) -> Vec3 {
-        if self.hit[i] {
-            self.colour[i].clamp(Vec3::ZERO, Vec3::ONE)
+    fn colour_seen(&self, i: usize) -> Vec3 {
+        let Seen { colour, hit } = self.seen[i];
+        if hit {
+            colour.clamp(Vec3::ZERO, Vec3::ONE)
         } else {
-            self.colour[i]
+            colour
         }
     }
 }
@@ -131,8 +140,9 @@ pub(super) fn trace<'a, C: Count>(
         match depths.last_mut() {
             Some(parents) => {
                 for i in 0..queue.len() {
-                    let parent = queue.parent[i] as usize;
-                    parents.colour[parent] += queue.weight[i] * queue.seen(i);
+                    let Lineage { parent, weight, .. } = queue.lineage[i];
+                    let parent = parent as usize;
+                    parents.seen[parent].colour += weight * queue.colour_seen(i);
                     if C::ON {
                         parents.work[parent].merge(&queue.work[i]);
                     }
@@ -140,8 +150,8 @@ pub(super) fn trace<'a, C: Count>(
             }
             None => {
                 for i in 0..queue.len() {
-                    let pixel = queue.parent[i] as usize;
-                    sums[pixel] += queue.seen(i);
+                    let pixel = queue.lineage[i].parent as usize;
+                    sums[pixel] += queue.colour_seen(i);
                     if C::ON {
                         work[pixel].merge(&queue.work[i]);
                     }
@@ -182,13 +192,17 @@ fn shade_depth<'a, C: Count>(
     for (i, (hit, ray)) in hits.iter().zip(&queue.rays).enumerate() {
         match hit {
             Some(hit) => {
-                queue.colour.push(Vec3::ZERO);
-                queue.hit.push(true);
+                queue.seen.push(Seen {
+                    colour: Vec3::ZERO,
+                    hit: true,
+                });
                 blocks.push(shader, &queue.rays, i as u32, *hit);
             }
             None => {
-                queue.colour.push(shader.background(ray.dir, depth));
-                queue.hit.push(false);
+                queue.seen.push(Seen {
+                    colour: shader.background(ray.dir, depth),
+                    hit: false,
+                });
             }
         }
     }
@@ -210,7 +224,7 @@ fn shade_depth<'a, C: Count>(
             colour = lit.select_vec(colour + added, colour);
         }
         for_lanes(block.lanes, |k| {
-            queue.colour[block.ray[k] as usize] = colour.lane(k)
+            queue.seen[block.ray[k] as usize].colour = colour.lane(k)
         });
     }
 
@@ -228,20 +242,20 @@ fn shade_depth<'a, C: Count>(
             if optics.spawns_none() {
                 continue;
             }
-            let ior_here = F32x8::from_array(block.ray.map(|i| queue.ior[i as usize]));
+            let ior_here = F32x8::from_array(block.ray.map(|i| queue.lineage[i as usize].ior));
             let inside = Mask8::from_bitmask(block.inside);
             let schlick = shader.options.schlick;
             let bounce = Bounce8::new(block.dir, block.nf, inside, ior_here, &optics, schlick);
             for_lanes(bounce.reflected.bitmask() & block.lanes, |k| {
                 let i = block.ray[k] as usize;
-                let sample = queue.samples[i].spawn(0);
+                let sample = queue.lineage[i].sample.spawn(0);
                 let ray = Ray {
                     origin: block.origin.lane(k),
                     dir: shader.fuzz(bounce.mirror.lane(k), block.nf.lane(k), &sample.rng),
                     time: queue.rays[i].time,
                 };
                 let weight = bounce.reflected_weight.lane(k);
-                next.push(ray, sample, queue.ior[i], i as u32, weight);
+                next.push(ray, sample, queue.lineage[i].ior, i as u32, weight);
             });
             let through = bounce.transmitted.bitmask() & block.lanes;
             if through != 0 {
@@ -255,7 +269,7 @@ fn shade_depth<'a, C: Count>(
                     };
                     let (weight, ior) =
                         (bounce.transmitted_weight.lane(k), bounce.ior_next.lane(k));
-                    transmitted.push(ray, queue.samples[i].spawn(1), ior, i as u32, weight);
+                    transmitted.push(ray, queue.lineage[i].sample.spawn(1), ior, i as u32, weight);
                 });
             }
         }
@@ -439,7 +453,7 @@ impl<'a> ShadowQueue<'a> {
         let mut colour = ArenaVec::with_capacity_in(lights, arena);
         let mut packer = stream::Packer::new(shader.tracer);
         let mut traced = 0;
-        let (samples, rays, work) = (&queue.samples, &queue.rays, &mut queue.work);
+        let (lineage, rays, work) = (&queue.lineage, &queue.rays, &mut queue.work);
         // The work of the shadow ray tagged `tag` (its entry and lane, below).
         let mut counted = |tag: u32, count: C| {
             let block = &blocks[(tag >> 3) as usize % blocks.len()];
@@ -455,7 +469,7 @@ impl<'a> ShadowQueue<'a> {
                     normal: block.nf,
                     origin: block.origin,
                 };
-                let sample = |k: usize| samples[block.ray[k] as usize];
+                let sample = |k: usize| lineage[block.ray[k] as usize].sample;
                 let (facing, incident) = emitter.sample8(index, &receiver, sample);
                 let facing = facing.bitmask() & block.lanes;
                 let entry = lit.len() as u32;
