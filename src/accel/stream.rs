@@ -83,10 +83,9 @@ pub fn closest_counting<Q: Query, C: Count>(
     );
 }
 
-/// [`closest_counting`] for rays stored side by side over their whole length (the
-/// renderer's queues): each full packet's rays are read where they lie, as a copy of
-/// them, stored just before the packet reads them lane by lane, stalls on store
-/// forwarding.
+/// [`closest_counting`] for rays stored side by side, each over its whole length (the
+/// renderer's queues): a full packet's rays are read where they lie, as a copy of them,
+/// stored just before the packet reads them lane by lane, would wait on store forwarding.
 #[inline(never)]
 pub fn closest_rays_counting<C: Count>(
     tracer: &Tracer,

@@ -1,5 +1,5 @@
 //! The stream renderer: a tile's samples traced breadth first, one depth at a time. Each
-//! depth is a [`Queue`] (structure of arrays in the tile's arena): its rays, then their
+//! depth is a [`Queue`] (arrays in the tile's arena): its rays, then their
 //! hits' shadow rays light by light, are traced as packets of eight by the stream
 //! scheduler ([`crate::accel::stream`], which `bench` measures), the hits are shaded,
 //! and the rays they spawn make the next depth's queue. A depth's hits are gathered eight
@@ -29,9 +29,9 @@ use crate::prim::{PrimId, PrimKind};
 use crate::ray::{Hit, Ray};
 use crate::simd::{for_lanes, F32x8, Mask8, Vec3x8};
 
-/// The rays of one depth, and what they bring back. The rays lie side by side, as the
-/// scheduler reads them; what else a ray carries is one record (a push each, not one a
-/// field: the pushes were a twentieth of a render's instructions).
+/// The rays of one depth, and what they bring back. The rays lie side by side, where the
+/// scheduler reads them; all else a ray carries is in two records, a push each (a push
+/// per field was a twentieth of a render's instructions).
 pub(super) struct Queue<'a, C> {
     rays: ArenaVec<'a, Ray>,
     lineage: ArenaVec<'a, Lineage>,
@@ -316,9 +316,9 @@ struct HitBlock {
 
 impl HitBlock {
     /// The block of the hits `hits` of the rays `rays` (at the indices `ray` of the
-    /// depth's queue), whose first `count` lanes are hits and whose others repeat lane 0: the points recomputed on the
-    /// surfaces ([`Shader::hit_points8`]) and the normals turned to face the rays, as
-    /// [`Shader::hit_point`] turns them.
+    /// depth's queue), whose first `count` lanes are hits and whose others repeat lane 0:
+    /// the points recomputed on the surfaces ([`Shader::hit_points8`]) and the normals
+    /// turned to face the rays, as [`Shader::hit_point`] turns them.
     fn new(
         shader: &Shader,
         rays: &[Ray; 8],
