@@ -248,14 +248,15 @@ fn shade_depth<'a, C: Count>(
             let bounce = Bounce8::new(block.dir, block.nf, inside, ior_here, &optics, schlick);
             for_lanes(bounce.reflected.bitmask() & block.lanes, |k| {
                 let i = block.ray[k] as usize;
-                let sample = queue.lineage[i].sample.spawn(0);
+                let Lineage { sample, ior, .. } = queue.lineage[i];
+                let sample = sample.spawn(0);
                 let ray = Ray {
                     origin: block.origin.lane(k),
                     dir: shader.fuzz(bounce.mirror.lane(k), block.nf.lane(k), &sample.rng),
                     time: queue.rays[i].time,
                 };
                 let weight = bounce.reflected_weight.lane(k);
-                next.push(ray, sample, queue.lineage[i].ior, i as u32, weight);
+                next.push(ray, sample, ior, i as u32, weight);
             });
             let through = bounce.transmitted.bitmask() & block.lanes;
             if through != 0 {
