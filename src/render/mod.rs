@@ -7,9 +7,9 @@
 //! 4 x 2 pixels, each pixel's samples in order, so a packet's lanes are eight pixels at
 //! 1 spp and one pixel's samples from 8 spp up; their rays are made eight at a time. Each
 //! pixel sums its samples in one order whatever the mode, and tiles write their own block
-//! of one buffer, so the image is the same for every mode and thread count. A worker's
-//! scratch comes from an arena reset per tile: a warm tile asks the global allocator for
-//! nothing.
+//! of one buffer, so the image is the same for every mode and thread count. A stream
+//! traces a tile's samples in batches (`BATCH_SAMPLES`), its queues in a worker's arena
+//! reset per batch: a warm tile asks the global allocator for nothing.
 
 pub mod camera;
 pub mod cost;
@@ -434,7 +434,7 @@ fn tiles(region: Region, height: u32) -> Vec<Tile> {
 }
 
 thread_local! {
-    /// Each worker's scratch memory, reset for every tile: the sample sums and the
+    /// Each worker's scratch memory, reset for every batch of a tile's samples: the
     /// streams' queues never go through the global allocator.
     static SCRATCH: RefCell<Bump> = RefCell::new(Bump::new());
 }
@@ -443,6 +443,10 @@ thread_local! {
 /// up, the pixels of its packets: 4 x 2 for packets of eight rays, 4 x 4 for sixteen.
 const PACKET_WIDTH: u32 = 4;
 const PACKET_HEIGHT: u32 = (PACKET / 4) as u32;
+
+/// The primary samples a stream traces at once (a multiple of the packet width): with
+/// the rays they spawn, their queues stay within a core's L2 cache.
+const BATCH_SAMPLES: usize = 512;
 
 /// Writes the pixels of one tile into `pixels` and their rays' work into `work`, row by
 /// row from its bottom row, and returns the rays they took.
@@ -485,9 +489,10 @@ fn render_tile<C: Count>(
         };
         (FilmSample { sx, sy, lens, time }, sample)
     };
+    // Each pixel sums its samples in place, then takes their mean.
+    let sums = &mut pixels[..(tile.width * tile.height) as usize];
+    sums.fill(Vec3::ZERO);
     SCRATCH.with_borrow_mut(|arena| {
-        arena.reset();
-        let sums = arena.alloc_slice_fill_copy((tile.width * tile.height) as usize, Vec3::ZERO);
         trace_tile(
             shader,
             camera,
@@ -498,13 +503,13 @@ fn render_tile<C: Count>(
             arena,
             (sums, work),
             &mut rays,
-        );
-        let samples = grid.cells() as f32;
-        for (pixel, sum) in pixels.iter_mut().zip(sums.iter()) {
-            *pixel = *sum / samples;
-        }
-        rays
-    })
+        )
+    });
+    let samples = grid.cells() as f32;
+    for pixel in sums.iter_mut() {
+        *pixel /= samples;
+    }
+    rays
 }
 
 /// Adds the colour and the rays' work of every sample of every pixel of `tile` into
@@ -519,7 +524,7 @@ fn trace_tile<C: Count>(
     tile: Tile,
     grid: SampleGrid,
     film_sample: impl Fn(u32, u32, u32, u32) -> (FilmSample, Sample),
-    arena: &Bump,
+    arena: &mut Bump,
     (sums, work): (&mut [Vec3], &mut [Work<C>]),
     rays: &mut RayCounts,
 ) {
@@ -541,47 +546,47 @@ fn trace_tile<C: Count>(
             }
         }
         RenderMode::Stream => {
-            // Lane l of the packet whose block starts at (bx, by) is pixel (bx + l % 4, by + l / 4)
-            // of the tile, when that pixel is in the tile.
-            let lane_pixel = |bx: u32, by: u32, l: u32| {
-                let (x, y) = (bx + l % PACKET_WIDTH, by + l / PACKET_WIDTH);
-                (x < tile.width && y < tile.height).then_some((x, y))
-            };
-            let blocks = (0..tile.height)
-                .step_by(PACKET_HEIGHT as usize)
-                .flat_map(|by| {
-                    (0..tile.width)
-                        .step_by(PACKET_WIDTH as usize)
-                        .map(move |bx| (bx, by))
-                });
-            // The primary samples in the packets' order: a block's pixels one by one, each
-            // with its samples in their order, so that a packet's rays leave through as
-            // few pixels as it can hold.
-            let samples = (tile.width * tile.height * grid.cells()) as usize;
-            let mut gathered = ArenaVec::with_capacity_in(samples, arena);
-            for (bx, by) in blocks {
-                for l in 0..PACKET_WIDTH * PACKET_HEIGHT {
-                    let Some((x, y)) = lane_pixel(bx, by, l) else {
-                        continue;
-                    };
-                    for q in 0..grid.rows {
-                        for p in 0..grid.columns {
-                            let (film, sample) = film_sample(tile.x + x, tile.y + y, p, q);
-                            gathered.push((film, sample, y * tile.width + x));
+            // The tile's pixels in the packets' order: blocks of 4 x 2 (or 4 x 4), each
+            // block's row by row, so that a packet's rays leave through as few pixels as
+            // it can hold (a block's at 1 spp, one pixel's from 8 spp up).
+            let mut order = [(0, 0); (TILE * TILE) as usize];
+            let mut pixels = 0;
+            for by in (0..tile.height).step_by(PACKET_HEIGHT as usize) {
+                for bx in (0..tile.width).step_by(PACKET_WIDTH as usize) {
+                    for l in 0..PACKET_WIDTH * PACKET_HEIGHT {
+                        let (x, y) = (bx + l % PACKET_WIDTH, by + l / PACKET_WIDTH);
+                        if x < tile.width && y < tile.height {
+                            order[pixels] = (x, y);
+                            pixels += 1;
                         }
                     }
                 }
             }
-            // Their rays eight at a time; a short last chunk repeats its first sample.
-            let mut primary = stream::Queue::with_capacity_in(samples, arena);
-            for chunk in gathered.chunks(8) {
-                let film = |k: usize| &chunk.get(k).unwrap_or(&chunk[0]).0;
-                let rays = camera.rays8(film);
-                for (k, &(_, sample, pixel)) in chunk.iter().enumerate() {
-                    primary.push_primary(rays.ray(k), sample, pixel);
+            // Each pixel's samples in their order, traced a batch at a time, each batch's
+            // queues in the arena anew: a whole tile's at 16 spp outgrow the core's cache.
+            let cells = grid.cells() as usize;
+            let samples = pixels * cells;
+            for start in (0..samples).step_by(BATCH_SAMPLES) {
+                arena.reset();
+                let batch = start..(start + BATCH_SAMPLES).min(samples);
+                let mut gathered = ArenaVec::with_capacity_in(batch.len(), arena);
+                for s in batch {
+                    let ((x, y), cell) = (order[s / cells], (s % cells) as u32);
+                    let (p, q) = (cell % grid.columns, cell / grid.columns);
+                    let (film, sample) = film_sample(tile.x + x, tile.y + y, p, q);
+                    gathered.push((film, sample, y * tile.width + x));
                 }
+                // Their rays eight at a time; a short last chunk repeats its first sample.
+                let mut primary = stream::Queue::with_capacity_in(gathered.len(), arena);
+                for chunk in gathered.chunks(8) {
+                    let film = |k: usize| &chunk.get(k).unwrap_or(&chunk[0]).0;
+                    let rays = camera.rays8(film);
+                    for (k, &(_, sample, pixel)) in chunk.iter().enumerate() {
+                        primary.push_primary(rays.ray(k), sample, pixel);
+                    }
+                }
+                stream::trace(shader, arena, primary, (&mut *sums, &mut *work), rays);
             }
-            stream::trace(shader, arena, primary, (sums, work), rays);
         }
     }
 }
