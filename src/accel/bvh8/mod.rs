@@ -42,9 +42,37 @@ pub struct Bvh8 {
     binary: Bvh2Stats,
 }
 
-/// Entries on the traversal stack: each level pushes at most `WIDTH - 1`, and the binary
-/// trees stay under `bvh2::MAX_DEPTH` levels, which bounds the collapsed ones too.
-const STACK_SIZE: usize = (WIDTH - 1) * super::bvh2::MAX_DEPTH + 1;
+/// Entries on the traversal stack of a tree `depth` levels deep: each level pushes at most
+/// `WIDTH - 1`.
+const fn stack_size(depth: usize) -> usize {
+    (WIDTH - 1) * depth + 1
+}
+
+/// Trees at most this deep (scenes' trees are 4 to 12) walk with stacks sized for them, a
+/// few KiB: a walk's frame with the deepest tree's stack was 9 KiB, and a profiler's copy
+/// of the call stack (16 KiB in `render-profile`) then missed the render loop above it.
+const SHALLOW_DEPTH: usize = 32;
+/// Deeper trees, which only contrived scenes make, walk with stacks sized for the deepest:
+/// the binary trees stay under `bvh2::MAX_DEPTH` levels, which bounds the collapsed ones.
+const DEEP_STACK: usize = stack_size(super::bvh2::MAX_DEPTH);
+const SHALLOW_STACK: usize = stack_size(SHALLOW_DEPTH);
+
+/// Calls the walk `$walk` of `$tree` with the stack its depth asks for; a deep walk out
+/// of line, so that its stack is not in the frame of every caller.
+macro_rules! walk {
+    ($tree:ident.$walk:ident::<$count:ty>($($arg:expr),*)) => {
+        if $tree.depth <= SHALLOW_DEPTH {
+            $tree.$walk::<$count, SHALLOW_STACK>($($arg),*)
+        } else {
+            out_of_line(|| $tree.$walk::<$count, DEEP_STACK>($($arg),*))
+        }
+    };
+}
+
+#[inline(never)]
+fn out_of_line<R>(walk: impl FnOnce() -> R) -> R {
+    walk()
+}
 
 /// The walks from the root: one ray's in `traverse.rs`, a packet's in `packet.rs`.
 impl Structure for Bvh8 {
@@ -57,7 +85,7 @@ impl Structure for Bvh8 {
         count: &mut C,
     ) {
         if !self.nodes.is_empty() {
-            self.closest_from(0, geometry, query, closest, count);
+            walk!(self.closest_from::<C>(0, geometry, query, closest, count));
         }
     }
 
@@ -69,7 +97,7 @@ impl Structure for Bvh8 {
         t_max: f32,
         count: &mut C,
     ) -> bool {
-        !self.nodes.is_empty() && self.occluded_from(0, geometry, query, t_max, count)
+        !self.nodes.is_empty() && walk!(self.occluded_from::<C>(0, geometry, query, t_max, count))
     }
 
     #[inline]
@@ -80,7 +108,7 @@ impl Structure for Bvh8 {
         closest: &mut [ClosestHit; PACKET],
         count: &mut C::Lanes,
     ) {
-        self.packet_closest::<C>(geometry, query, closest, count);
+        walk!(self.packet_closest::<C>(geometry, query, closest, count));
     }
 
     #[inline]
@@ -90,7 +118,7 @@ impl Structure for Bvh8 {
         query: &PacketQuery,
         count: &mut C::Lanes,
     ) -> LaneBits {
-        self.packet_occluded::<C>(geometry, query, count)
+        walk!(self.packet_occluded::<C>(geometry, query, count))
     }
 }
 
@@ -137,5 +165,80 @@ impl Bvh8 {
         std::mem::size_of_val(&self.nodes[..])
             + std::mem::size_of_val(&self.prims[..])
             + self.leaves.memory()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::bvh2::Bvh2;
+    use crate::accel::count::NoCount;
+    use crate::intersect::IntersectOptions;
+    use crate::ray::{Ray, RayPacket};
+    use crate::scene::p3f::parse_text;
+    use glam::Vec3;
+
+    /// The stacks sized for the deepest trees (which only contrived scenes reach) answer
+    /// as the shallow ones: each walk, one ray and packets, closest and occlusion.
+    #[test]
+    fn deep_stacks_walk_as_shallow_ones() {
+        let text: String = (0..300)
+            .map(|i| {
+                let (x, y, z) = ((i * 37 % 101) as f32, (i * 53 % 89) as f32, (i % 7) as f32);
+                match i % 2 {
+                    0 => format!("s {} {} {z} 0.4\n", x * 0.3, y * 0.2),
+                    _ => format!("p 3 {x} {y} {z} {} {y} {z} {x} {} {z}\n", x + 0.5, y + 0.5),
+                }
+            })
+            .collect();
+        let scene = parse_text(&text).unwrap();
+        let geometry = &scene.geometry;
+        let bvh2 = Bvh2::build(geometry, BvhBuild::Sah, [0.0, 0.0], 0.0);
+        let shallow = Bvh8::collapse(bvh2, geometry).expect("small trees collapse");
+        assert!(shallow.depth <= SHALLOW_DEPTH);
+        let deep = Bvh8 {
+            depth: SHALLOW_DEPTH + 1,
+            ..shallow.clone()
+        };
+        let options = IntersectOptions::default();
+        let rays: Vec<Ray> = (0..64)
+            .map(|i| {
+                let origin = Vec3::new(-5.0, (i % 8) as f32 * 2.5, 3.0 + (i / 8) as f32 * 0.2);
+                Ray::new(
+                    origin,
+                    Vec3::new(1.0, 0.05 * (i % 5) as f32, -0.1).normalize(),
+                )
+            })
+            .collect();
+        let mut hits = 0;
+        for packet_rays in rays.chunks_exact(PACKET) {
+            let packet_rays: &[Ray; PACKET] = packet_rays.try_into().unwrap();
+            let packet = RayPacket::new(packet_rays).with_t_max([30.0; PACKET]);
+            let query = PacketQuery {
+                packet: &packet,
+                options,
+            };
+            let [closest_shallow, closest_deep] = [&shallow, &deep].map(|tree| {
+                let mut closest = [ClosestHit::new(f32::INFINITY); PACKET];
+                tree.closest_packet::<NoCount>(geometry, &query, &mut closest, &mut NoCount);
+                closest.map(|c| c.hit())
+            });
+            assert_eq!(closest_shallow, closest_deep);
+            let [blocked_shallow, blocked_deep] = [&shallow, &deep]
+                .map(|tree| tree.occluded_packet::<NoCount>(geometry, &query, &mut NoCount));
+            assert_eq!(blocked_shallow, blocked_deep);
+            for ray in packet_rays {
+                let query = RayQuery::new(ray, 0.0, options);
+                let [one_shallow, one_deep] = [&shallow, &deep].map(|tree| {
+                    let mut closest = ClosestHit::new(f32::INFINITY);
+                    tree.closest(geometry, &query, &mut closest, &mut NoCount);
+                    let blocked = tree.occluded(geometry, &query, 30.0, &mut NoCount);
+                    (closest.hit(), blocked)
+                });
+                assert_eq!(one_shallow, one_deep);
+                hits += usize::from(one_shallow.0.is_some());
+            }
+        }
+        assert!(hits > 8, "{hits} hits of {}", rays.len());
     }
 }

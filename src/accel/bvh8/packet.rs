@@ -8,7 +8,7 @@
 //! eight slots of the pack.
 
 use super::node::{ChildRef, Node8, LEAF};
-use super::{Bvh8, STACK_SIZE};
+use super::Bvh8;
 use crate::accel::count::{Count, CountLanes};
 use crate::accel::hit::ClosestHit;
 use crate::accel::stack::Stack;
@@ -26,7 +26,7 @@ impl Bvh8 {
     /// entry on the stack. An entry is skipped when it lies beyond every lane's closest
     /// hit; a subtree left with few lanes is finished one ray at a time. Each lane's
     /// answer is the one single-ray walk ([`Bvh8::closest_from`]) gives.
-    pub(super) fn packet_closest<C: Count>(
+    pub(super) fn packet_closest<C: Count, const STACK: usize>(
         &self,
         geometry: &Geometry,
         query: &PacketQuery,
@@ -45,7 +45,7 @@ impl Bvh8 {
         // The lanes' limits when the walk starts: as hits bring them closer, the lanes'
         // own box tests cull by distance.
         let range_limit = largest(limit, active);
-        let mut stack = Stack::<(ChildRef, LaneBits, f32), STACK_SIZE>::new();
+        let mut stack = Stack::<(ChildRef, LaneBits, f32), STACK>::new();
         stack.push((0, active, t_min));
         while let Some((child, lanes, t_entry)) = stack.pop() {
             // Beyond every lane's closest hit: nothing closer inside (ties are visited).
@@ -67,7 +67,13 @@ impl Bvh8 {
                     if leaf {
                         self.closest_in_leaf(geometry, child, &lane, &mut closest[k], &mut counted);
                     } else {
-                        self.closest_from(child, geometry, &lane, &mut closest[k], &mut counted);
+                        self.closest_from::<C, STACK>(
+                            child,
+                            geometry,
+                            &lane,
+                            &mut closest[k],
+                            &mut counted,
+                        );
                     }
                     count.add_lane(k, &counted);
                 });
@@ -98,7 +104,7 @@ impl Bvh8 {
 
     /// The active lanes of `query`'s packet whose ray is blocked within its interval, as
     /// a bit mask, the rays traced together as in [`Bvh8::packet_closest`].
-    pub(super) fn packet_occluded<C: Count>(
+    pub(super) fn packet_occluded<C: Count, const STACK: usize>(
         &self,
         geometry: &Geometry,
         query: &PacketQuery,
@@ -114,7 +120,7 @@ impl Bvh8 {
         let range = box_rays.range(active);
         let range_limit = largest(lanes_t_max, active);
         let mut blocked: LaneBits = 0;
-        let mut stack = Stack::<(ChildRef, LaneBits), STACK_SIZE>::new();
+        let mut stack = Stack::<(ChildRef, LaneBits), STACK>::new();
         stack.push((0, active));
         while let Some((child, lanes)) = stack.pop() {
             let lanes = lanes & !blocked;
@@ -140,7 +146,13 @@ impl Bvh8 {
                     let hit = if leaf {
                         self.blocks(geometry, child, &lane, t_max[k], &mut counted)
                     } else {
-                        self.occluded_from(child, geometry, &lane, t_max[k], &mut counted)
+                        self.occluded_from::<C, STACK>(
+                            child,
+                            geometry,
+                            &lane,
+                            t_max[k],
+                            &mut counted,
+                        )
                     };
                     count.add_lane(k, &counted);
                     if hit {

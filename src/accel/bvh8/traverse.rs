@@ -2,7 +2,7 @@
 //! once, nearest child first; a pack leaf's primitives tested eight at a time.
 
 use super::node::{leaf_parts, ChildRef, LEAF};
-use super::{Bvh8, STACK_SIZE};
+use super::Bvh8;
 use crate::accel::count::Count;
 use crate::accel::hit::ClosestHit;
 use crate::accel::stack::Stack;
@@ -60,7 +60,7 @@ impl Bvh8 {
 
     /// The closest hit of `query` in the subtree under `start`, offered to `closest`.
     #[inline]
-    pub(super) fn closest_from<C: Count>(
+    pub(super) fn closest_from<C: Count, const STACK: usize>(
         &self,
         start: ChildRef,
         geometry: &Geometry,
@@ -69,7 +69,7 @@ impl Bvh8 {
         count: &mut C,
     ) {
         let (t_min, box_ray) = (query.t_min, BoxRay::new(query.ray.origin, query.inv_dir));
-        let mut stack = Stack::<(ChildRef, f32), STACK_SIZE>::new();
+        let mut stack = Stack::<(ChildRef, f32), STACK>::new();
         stack.push((start, t_min));
         while let Some((child, t_entry)) = stack.pop() {
             // Entries beyond the closest hit cannot hold a closer one (ties may).
@@ -96,7 +96,7 @@ impl Bvh8 {
     /// Whether a primitive of the subtree under `start` blocks `query` within
     /// `(query.t_min, t_max)`.
     #[inline(always)]
-    pub(super) fn occluded_from<C: Count>(
+    pub(super) fn occluded_from<C: Count, const STACK: usize>(
         &self,
         start: ChildRef,
         geometry: &Geometry,
@@ -105,7 +105,7 @@ impl Bvh8 {
         count: &mut C,
     ) -> bool {
         let (t_min, box_ray) = (query.t_min, BoxRay::new(query.ray.origin, query.inv_dir));
-        let mut stack = Stack::<ChildRef, STACK_SIZE>::new();
+        let mut stack = Stack::<ChildRef, STACK>::new();
         let mut next = Some(start);
         while let Some(child) = next.take().or_else(|| stack.pop()) {
             if child & LEAF != 0 {
