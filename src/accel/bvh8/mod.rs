@@ -35,7 +35,7 @@ pub struct Bvh8 {
     nodes: Vec<Node8>,
     prims: Vec<PrimId>,
     leaves: Leaves,
-    /// The longest path from the root to a leaf, in nodes (statistics).
+    /// The longest path from the root to a leaf, in nodes: it sizes the walks' stacks.
     depth: usize,
     build: BvhBuild,
     /// The statistics of the binary tree it was collapsed from.
@@ -48,8 +48,8 @@ const fn stack_size(depth: usize) -> usize {
     (WIDTH - 1) * depth + 1
 }
 
-/// Trees at most this deep (scenes' trees are 4 to 12) walk with stacks sized for them, a
-/// few KiB: a walk's frame with the deepest tree's stack was 9 KiB, and a profiler's copy
+/// Trees at most this deep (the course scenes' are 5 to 8) walk with stacks sized for them,
+/// a few KiB: a walk's frame with the deepest tree's stack was 9 KiB, and a profiler's copy
 /// of the call stack (16 KiB in `render-profile`) then missed the render loop above it.
 const SHALLOW_DEPTH: usize = 32;
 /// Deeper trees, which only contrived scenes make, walk with stacks sized for the deepest:
