@@ -444,8 +444,8 @@ thread_local! {
 const PACKET_WIDTH: u32 = 4;
 const PACKET_HEIGHT: u32 = (PACKET / 4) as u32;
 
-/// The primary samples a stream traces at once (a multiple of the packet width): with
-/// the rays they spawn, their queues stay within a core's L2 cache.
+/// The primary samples a stream traces at once, in whole pixels (one pixel where it has
+/// more): with the rays they spawn, their queues stay within a core's L2 cache.
 const BATCH_SAMPLES: usize = 512;
 
 /// Writes the pixels of one tile into `pixels` and their rays' work into `work`, row by
@@ -562,19 +562,20 @@ fn trace_tile<C: Count>(
                     }
                 }
             }
-            // Each pixel's samples in their order, traced a batch at a time, each batch's
-            // queues in the arena anew: a whole tile's at 16 spp outgrow the core's cache.
-            let cells = grid.cells() as usize;
-            let samples = pixels * cells;
-            for start in (0..samples).step_by(BATCH_SAMPLES) {
+            // Each pixel's samples in their order, traced a batch of pixels at a time, each
+            // batch's queues in the arena anew: a whole tile's at 16 spp outgrow the cache.
+            let pixels_per_batch = (BATCH_SAMPLES / grid.cells() as usize).max(1);
+            for batch in order[..pixels].chunks(pixels_per_batch) {
                 arena.reset();
-                let batch = start..(start + BATCH_SAMPLES).min(samples);
-                let mut gathered = ArenaVec::with_capacity_in(batch.len(), arena);
-                for s in batch {
-                    let ((x, y), cell) = (order[s / cells], (s % cells) as u32);
-                    let (p, q) = (cell % grid.columns, cell / grid.columns);
-                    let (film, sample) = film_sample(tile.x + x, tile.y + y, p, q);
-                    gathered.push((film, sample, y * tile.width + x));
+                let capacity = batch.len() * grid.cells() as usize;
+                let mut gathered = ArenaVec::with_capacity_in(capacity, arena);
+                for &(x, y) in batch {
+                    for q in 0..grid.rows {
+                        for p in 0..grid.columns {
+                            let (film, sample) = film_sample(tile.x + x, tile.y + y, p, q);
+                            gathered.push((film, sample, y * tile.width + x));
+                        }
+                    }
                 }
                 // Their rays eight at a time; a short last chunk repeats its first sample.
                 let mut primary = stream::Queue::with_capacity_in(gathered.len(), arena);

@@ -1,5 +1,5 @@
-//! The stream renderer: a tile's samples traced breadth first, one depth at a time. Each
-//! depth is a [`Queue`] (arrays in the tile's arena): its rays, then their
+//! The stream renderer: a batch of a tile's samples traced breadth first, one depth at a
+//! time. Each depth is a [`Queue`] (arrays in the worker's arena): its rays, then their
 //! hits' shadow rays light by light, are traced as packets of eight by the stream
 //! scheduler ([`crate::accel::stream`], which `bench` measures), the hits are shaded,
 //! and the rays they spawn make the next depth's queue. A depth's hits are gathered eight
@@ -196,7 +196,7 @@ fn shade_depth<'a, C: Count>(
                     colour: Vec3::ZERO,
                     hit: true,
                 });
-                blocks.push(shader, &queue.rays, i as u32, *hit);
+                blocks.push(shader, i as u32, ray, *hit);
             }
             None => {
                 queue.seen.push(Seen {
@@ -391,11 +391,11 @@ impl<'a> HitBlocks<'a> {
         }
     }
 
-    /// Adds the hit `hit` of ray `ray` of `rays` (the depth's queue).
-    fn push(&mut self, shader: &Shader, rays: &[Ray], ray: u32, hit: Hit) {
-        self.ray[self.filled] = ray;
+    /// Adds the hit `hit` of `ray`, ray `index` of the depth's queue.
+    fn push(&mut self, shader: &Shader, index: u32, ray: &Ray, hit: Hit) {
+        self.ray[self.filled] = index;
         self.hits[self.filled] = hit;
-        self.rays[self.filled] = rays[ray as usize];
+        self.rays[self.filled] = *ray;
         self.filled += 1;
         if self.filled == 8 {
             self.close(shader);

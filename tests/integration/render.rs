@@ -20,7 +20,7 @@ use p3trace::scene::{parse_file, parse_file_in, Scene};
 /// scenes, with an odd size so that packets at the edges have idle lanes, give the scalar
 /// image in every mode, float for float (so each pixel's samples add in one order), with
 /// either shading profile, with 4 samples a pixel (a packet's lanes are two pixels'
-/// samples) and with 9 (packets, and a tile's batches of samples, straddle pixels).
+/// samples) and with 9 (packets straddle pixels).
 #[test]
 fn every_mode_gives_the_scalar_image() {
     let mut paths: Vec<_> = std::fs::read_dir(common::project_file("scenes"))
