@@ -84,13 +84,14 @@ impl<'a, C: Count> Queue<'a, C> {
     }
 
     fn push(&mut self, ray: Ray, sample: Sample, ior: f32, parent: u32, weight: Vec3) {
-        self.rays.push(ray);
-        self.lineage.push(Lineage {
+        push_reserved(&mut self.rays, ray);
+        let lineage = Lineage {
             sample,
             ior,
             parent,
             weight,
-        });
+        };
+        push_reserved(&mut self.lineage, lineage);
     }
 
     fn len(&self) -> usize {
@@ -112,6 +113,15 @@ impl<'a, C: Count> Queue<'a, C> {
             colour
         }
     }
+}
+
+/// Pushes `value` onto `vec`, made with room for it: a queue's vectors are made at the
+/// size they may reach. A push that may grow its vector calls out, and around that call
+/// the spawning loops kept every field of a ray on the stack; this one cannot call.
+#[inline(always)]
+fn push_reserved<T>(vec: &mut ArenaVec<T>, value: T) {
+    assert!(vec.len() < vec.capacity(), "a queue outgrew its room");
+    vec.push(value);
 }
 
 /// Traces the primary samples of `primary` and every ray they spawn, and adds each
