@@ -347,7 +347,7 @@ impl HitBlock {
             inside: inside.bitmask(),
             bounded: shader.options.profile == Profile::Standard,
             ray: *ray,
-            material: hits.map(|h| geometry.material(h.prim)),
+            material: geometry.materials8(hits.map(|h| h.prim)),
             point: surface.point,
             nf,
             error: surface.error,

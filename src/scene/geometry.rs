@@ -44,6 +44,19 @@ macro_rules! define_geometry {
                 }
             }
 
+            /// The materials of eight primitives, through one dispatch where they share a
+            /// kind (a hit block's, most often).
+            pub fn materials8(&self, prims: [PrimId; 8]) -> [u32; 8] {
+                let kind = prims[0].kind();
+                if prims.iter().all(|p| p.kind() == kind) {
+                    match kind {
+                        $(PrimKind::$kind => prims.map(|p| self.$field.material(p.index())),)*
+                    }
+                } else {
+                    prims.map(|p| self.material(p))
+                }
+            }
+
             /// The tight box of `prim` ([`Shapes::bounds`]).
             pub fn bounds(&self, prim: PrimId, shutter: [f32; 2]) -> Aabb {
                 match prim.kind() {
@@ -132,5 +145,49 @@ impl Geometry {
     /// Number of bounded primitives (everything but planes).
     pub fn bounded_count(&self) -> usize {
         PrimKind::BOUNDED.iter().map(|&k| self.count(k)).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn materials8_are_each_primitives_material() {
+        let mut geometry = Geometry::default();
+        for i in 0..8 {
+            geometry.spheres.push(Vec3::splat(i as f32), 1.0, 10 + i);
+            let p = Vec3::splat(i as f32);
+            geometry
+                .triangles
+                .push([p, p + Vec3::X, p + Vec3::Y], None, 20 + i);
+        }
+        let sphere = |i| PrimId::new(PrimKind::Sphere, i);
+        let triangle = |i| PrimId::new(PrimKind::Triangle, i);
+        let one_kind = [5, 0, 7, 7, 1, 3, 2, 4].map(sphere);
+        let mixed = [
+            sphere(5),
+            triangle(0),
+            sphere(7),
+            triangle(7),
+            sphere(1),
+            sphere(3),
+            triangle(2),
+            triangle(4),
+        ];
+        for prims in [
+            one_kind,
+            one_kind.map(|p| triangle(p.index() as u32)),
+            mixed,
+        ] {
+            assert_eq!(
+                geometry.materials8(prims),
+                prims.map(|p| geometry.material(p))
+            );
+        }
+        assert_eq!(
+            geometry.materials8(one_kind),
+            [15, 10, 17, 17, 11, 13, 12, 14]
+        );
     }
 }
