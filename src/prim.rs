@@ -203,6 +203,12 @@ impl PrimId {
     pub fn index(self) -> usize {
         (self.0 & Self::MAX_INDEX) as usize
     }
+
+    /// Whether `self` and `other` are of one kind: [`PrimId::kind`] of both compared,
+    /// without looking either up.
+    pub fn same_kind(self, other: PrimId) -> bool {
+        (self.0 ^ other.0) >> Self::INDEX_BITS == 0
+    }
 }
 
 // The kind must fit the bits above the index.
@@ -217,6 +223,10 @@ mod tests {
         for kind in PrimKind::ALL {
             let id = PrimId::new(kind, PrimId::MAX_INDEX);
             assert_eq!((id.kind(), id.index()), (kind, PrimId::MAX_INDEX as usize));
+            for other in PrimKind::ALL {
+                let same = PrimId::new(other, 0).same_kind(id);
+                assert_eq!(same, other == kind, "{kind:?} against {other:?}");
+            }
         }
         let bounded = PrimKind::BOUNDED.len();
         assert!(PrimKind::ALL[..bounded] == PrimKind::BOUNDED);

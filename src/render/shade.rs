@@ -436,8 +436,8 @@ impl<'a> Shader<'a> {
         let geometry = &self.tracer.geometry;
         match self.options.profile {
             Profile::Standard => {
-                let kind = hits[0].prim.kind();
-                if hits.iter().all(|h| h.prim.kind() == kind) {
+                if hits.iter().all(|h| h.prim.same_kind(hits[0].prim)) {
+                    let kind = hits[0].prim.kind();
                     let indices = hits.map(|h| h.prim.index());
                     let lanes = Hits8 {
                         t: hits.map(|h| h.t),

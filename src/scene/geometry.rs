@@ -47,9 +47,8 @@ macro_rules! define_geometry {
             /// The materials of eight primitives, through one dispatch where they share a
             /// kind (a hit block's, most often).
             pub fn materials8(&self, prims: [PrimId; 8]) -> [u32; 8] {
-                let kind = prims[0].kind();
-                if prims.iter().all(|p| p.kind() == kind) {
-                    match kind {
+                if prims.iter().all(|p| p.same_kind(prims[0])) {
+                    match prims[0].kind() {
                         $(PrimKind::$kind => prims.map(|p| self.$field.material(p.index())),)*
                     }
                 } else {
