@@ -263,7 +263,7 @@ fn shade_depth<'a, C: Count>(
                 let ray = Ray {
                     origin: block.origin.lane(k),
                     dir: shader.fuzz(bounce.mirror.lane(k), block.nf.lane(k), &sample.rng),
-                    time: queue.rays[i].time,
+                    time: block.time.lane(k),
                 };
                 let weight = bounce.reflected_weight.lane(k);
                 next.push(ray, sample, ior, i as u32, weight);
@@ -276,7 +276,7 @@ fn shade_depth<'a, C: Count>(
                     let ray = Ray {
                         origin: origin.lane(k),
                         dir: bounce.refracted.lane(k),
-                        time: queue.rays[i].time,
+                        time: block.time.lane(k),
                     };
                     let (weight, ior) =
                         (bounce.transmitted_weight.lane(k), bounce.ior_next.lane(k));
@@ -323,6 +323,8 @@ struct HitBlock {
     origin: Vec3x8,
     /// The direction of the ray that hit.
     dir: Vec3x8,
+    /// The shutter time of the ray that hit, which its shadow and spawned rays keep.
+    time: F32x8,
 }
 
 impl HitBlock {
@@ -353,6 +355,7 @@ impl HitBlock {
             error: surface.error,
             origin: Vec3x8::ZERO,
             dir,
+            time: F32x8::from_array(rays.map(|r| r.time)),
         };
         block.origin = block.offset(nf);
         block
@@ -464,7 +467,7 @@ impl<'a> ShadowQueue<'a> {
         let mut colour = ArenaVec::with_capacity_in(lights, arena);
         let mut packer = stream::Packer::new(shader.tracer);
         let mut traced = 0;
-        let (lineage, rays, work) = (&queue.lineage, &queue.rays, &mut queue.work);
+        let (lineage, work) = (&queue.lineage, &mut queue.work);
         // The work of the shadow ray tagged `tag` (its entry and lane, below).
         let mut counted = |tag: u32, count: C| {
             let block = &blocks[(tag >> 3) as usize % blocks.len()];
@@ -491,7 +494,7 @@ impl<'a> ShadowQueue<'a> {
                     let ray = Ray {
                         origin: block.origin.lane(k),
                         dir: incident.dir.lane(k),
-                        time: rays[block.ray[k] as usize].time,
+                        time: block.time.lane(k),
                     };
                     // The ray's entry (light and block) and lane, for `unlit`.
                     let tag = entry << 3 | k as u32;
