@@ -204,10 +204,14 @@ impl PrimId {
         (self.0 & Self::MAX_INDEX) as usize
     }
 
-    /// Whether `self` and `other` are of one kind: [`PrimId::kind`] of both compared,
-    /// without looking either up.
-    pub fn same_kind(self, other: PrimId) -> bool {
-        (self.0 ^ other.0) >> Self::INDEX_BITS == 0
+    /// The kind of every primitive of `ids`, where they share one (none where `ids` is
+    /// empty): their kind bits compared, the kind looked up once.
+    pub fn shared_kind(ids: &[PrimId]) -> Option<PrimKind> {
+        let first = ids.first()?;
+        let shared = ids
+            .iter()
+            .all(|id| (id.0 ^ first.0) >> Self::INDEX_BITS == 0);
+        shared.then(|| first.kind())
     }
 }
 
@@ -224,8 +228,12 @@ mod tests {
             let id = PrimId::new(kind, PrimId::MAX_INDEX);
             assert_eq!((id.kind(), id.index()), (kind, PrimId::MAX_INDEX as usize));
             for other in PrimKind::ALL {
-                let same = PrimId::new(other, 0).same_kind(id);
-                assert_eq!(same, other == kind, "{kind:?} against {other:?}");
+                let shared = PrimId::shared_kind(&[id, PrimId::new(other, 0)]);
+                assert_eq!(
+                    shared,
+                    (other == kind).then_some(kind),
+                    "{kind:?} against {other:?}"
+                );
             }
         }
         let bounded = PrimKind::BOUNDED.len();

@@ -24,6 +24,7 @@ use super::skybox::Skybox;
 use crate::accel::count::Count;
 use crate::accel::Tracer;
 use crate::intersect::{spawn_origin, Hits8, SphereRoots, SurfacePoint, SurfacePoint8};
+use crate::prim::PrimKind;
 use crate::ray::{Hit, Ray};
 use crate::scene::{Frame, Material, Scene};
 use crate::simd::{F32x8, Mask8, Vec3x8};
@@ -431,13 +432,18 @@ impl<'a> Shader<'a> {
 
     /// [`Shader::hit_point`] for eight hits (lane `k`: `hits[k]` along `rays[k]`): the
     /// points, their error bounds (zero with the `course` profile, which has none) and the
-    /// outward normals, eight at a time where the hits share a kind with a twin.
-    pub(super) fn hit_points8(&self, rays: &[Ray; 8], hits: &[Hit; 8]) -> SurfacePoint8 {
+    /// outward normals, eight at a time where the hits share a kind (`kind`,
+    /// [`crate::prim::PrimId::shared_kind`]) with a twin.
+    pub(super) fn hit_points8(
+        &self,
+        rays: &[Ray; 8],
+        hits: &[Hit; 8],
+        kind: Option<PrimKind>,
+    ) -> SurfacePoint8 {
         let geometry = &self.tracer.geometry;
         match self.options.profile {
             Profile::Standard => {
-                if hits.iter().all(|h| h.prim.same_kind(hits[0].prim)) {
-                    let kind = hits[0].prim.kind();
+                if let Some(kind) = kind {
                     let indices = hits.map(|h| h.prim.index());
                     let lanes = Hits8 {
                         t: hits.map(|h| h.t),

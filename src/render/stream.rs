@@ -339,7 +339,9 @@ impl HitBlock {
         hits: &[Hit; 8],
         count: usize,
     ) -> Self {
-        let surface = shader.hit_points8(rays, hits);
+        let prims = hits.map(|h| h.prim);
+        let kind = PrimId::shared_kind(&prims);
+        let surface = shader.hit_points8(rays, hits, kind);
         let dir = Vec3x8::from_fn(|k| rays[k].dir);
         let inside = dir.dot(surface.normal).gt(F32x8::ZERO);
         let nf = inside.select_vec(-surface.normal, surface.normal);
@@ -349,7 +351,7 @@ impl HitBlock {
             inside: inside.bitmask(),
             bounded: shader.options.profile == Profile::Standard,
             ray: *ray,
-            material: geometry.materials8(hits.map(|h| h.prim)),
+            material: geometry.materials8(kind, prims),
             point: surface.point,
             nf,
             error: surface.error,

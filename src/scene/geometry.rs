@@ -44,15 +44,12 @@ macro_rules! define_geometry {
                 }
             }
 
-            /// The materials of eight primitives, through one dispatch where they share a
-            /// kind (a hit block's, most often).
-            pub fn materials8(&self, prims: [PrimId; 8]) -> [u32; 8] {
-                if prims.iter().all(|p| p.same_kind(prims[0])) {
-                    match prims[0].kind() {
-                        $(PrimKind::$kind => prims.map(|p| self.$field.material(p.index())),)*
-                    }
-                } else {
-                    prims.map(|p| self.material(p))
+            /// The materials of eight primitives, through one dispatch where they share the
+            /// kind `kind` ([`PrimId::shared_kind`]; a hit block's, most often).
+            pub fn materials8(&self, kind: Option<PrimKind>, prims: [PrimId; 8]) -> [u32; 8] {
+                match kind {
+                    $(Some(PrimKind::$kind) => prims.map(|p| self.$field.material(p.index())),)*
+                    None => prims.map(|p| self.material(p)),
                 }
             }
 
@@ -179,13 +176,14 @@ mod tests {
             one_kind.map(|p| triangle(p.index() as u32)),
             mixed,
         ] {
+            let kind = PrimId::shared_kind(&prims);
             assert_eq!(
-                geometry.materials8(prims),
+                geometry.materials8(kind, prims),
                 prims.map(|p| geometry.material(p))
             );
         }
         assert_eq!(
-            geometry.materials8(one_kind),
+            geometry.materials8(Some(PrimKind::Sphere), one_kind),
             [15, 10, 17, 17, 11, 13, 12, 14]
         );
     }

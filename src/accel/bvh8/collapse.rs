@@ -187,9 +187,8 @@ impl Binary<'_> {
     /// packed kind.
     fn pack_kind(&self, kid: &Kid) -> Option<PrimKind> {
         let prims = &self.prims[kid.range.clone()];
-        let kind = prims.first()?.kind();
-        let packable = kind.is_packed() && prims.len() <= PACK;
-        (packable && prims.iter().all(|p| p.kind() == kind)).then_some(kind)
+        let kind = PrimId::shared_kind(prims)?;
+        (kind.is_packed() && prims.len() <= PACK).then_some(kind)
     }
 
     /// Nodes that become leaves of the 8-wide tree.
