@@ -11,7 +11,7 @@
 //! traces a packet as soon as it is full: the renderer's shadow rays, made light by light,
 //! go to one directly, and [`Occlusions`] keeps one for each light.
 //! What the other groupings cost, by end point and by direction octant, is in
-//! BENCHMARKS.md ("What did not pay"). Each query's work comes back with its answer when
+//! docs/did-not-pay.md. Each query's work comes back with its answer when
 //! the stream is traced with a [`Count`] that counts ([`closest_counting`],
 //! [`Occlusions::trace`]); [`NoCount`] hands back nothing.
 
