@@ -1,0 +1,125 @@
+#!/usr/bin/env python3
+"""Where a function's inlined code spends its instructions, by source line.
+
+Reads a callgrind profile made with `--dump-instr=yes` and puts each instruction's own
+cost at the outermost frame of SOURCE in the instruction's inline chain (addr2line -i):
+the line of SOURCE whose statement the instruction serves, however deeply the compiler
+inlined what that statement calls. Where that line is one of the `--expand` lines (a call
+that inlines a whole function, such as `stream::trace`'s call of `shade_depth`), the next
+frame of SOURCE inside it is taken instead. Instructions without a frame of SOURCE are
+grouped by the function they lie in, so that the groups add up to the whole run.
+
+BENCHMARKS.md's shading budget comes from it:
+
+    valgrind --tool=callgrind --dump-instr=yes --callgrind-out-file=cg.out \\
+      target/release/p3trace render SCENE --threads 1 --accel bvh --no-skybox -q -o x.png
+    scripts/inline-lines.py cg.out target/release/p3trace src/render/stream.rs --expand 141
+
+Needs binutils' addr2line and a binary with line tables (the release profile has them).
+"""
+
+import argparse
+import collections
+import re
+import subprocess
+import sys
+
+
+def own_costs(profile):
+    """Each (instruction address, function name)'s own cost in a callgrind profile."""
+    names = {}
+    costs = collections.Counter()
+    function = "?"
+    address = 0
+    after_calls = False
+
+    def named(text):
+        match = re.match(r"\((\d+)\)(?: (.*))?", text)
+        if not match:
+            return text
+        if match.group(2):
+            names[match.group(1)] = match.group(2)
+        return names.get(match.group(1), "?")
+
+    def position(token, previous):
+        if token == "*":
+            return previous
+        if token[0] in "+-":
+            return previous + int(token, 0)
+        return int(token, 0)
+
+    with open(profile, errors="replace") as lines:
+        for line in lines:
+            if line.startswith("fn="):
+                function = named(line[3:].strip())
+            elif line.startswith("cfn="):
+                named(line[4:].strip())
+            elif line.startswith("calls="):
+                after_calls = True  # the next cost line is the call's inclusive cost
+            elif line[:1].isdigit() or line[:1] in "+-*":
+                fields = line.split()
+                if len(fields) < 3:
+                    continue
+                address = position(fields[0], address)
+                if after_calls:
+                    after_calls = False
+                    continue
+                costs[(address, function)] += int(fields[2])
+    return costs
+
+
+def inline_chains(binary, addresses):
+    """Each address's inline chain, innermost frame first, as "path:line" strings."""
+    chains = {}
+    addresses = sorted(addresses)
+    for start in range(0, len(addresses), 4000):
+        chunk = addresses[start : start + 4000]
+        output = subprocess.run(
+            ["addr2line", "-a", "-i", "-e", binary] + [hex(a) for a in chunk],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+        current = None
+        for line in output.splitlines():
+            if line.startswith("0x"):
+                current = int(line, 16)
+                chains[current] = []
+            else:
+                chains[current].append(re.sub(r" \(discriminator \d+\)", "", line))
+    return chains
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("profile", help="callgrind output made with --dump-instr=yes")
+    parser.add_argument("binary", help="the profiled binary")
+    parser.add_argument("source", help="the source file whose lines to group by")
+    parser.add_argument("--expand", type=int, action="append", default=[],
+                        help="a line of SOURCE to look inside (repeatable)")
+    parser.add_argument("--top", type=int, default=40, help="groups to print (40)")
+    args = parser.parse_args()
+
+    costs = own_costs(args.profile)
+    if not costs:
+        sys.exit(f"inline-lines: no costs in {args.profile} (made with --dump-instr=yes?)")
+    chains = inline_chains(args.binary, {address for address, _ in costs})
+    groups = collections.Counter()
+    for (address, function), cost in costs.items():
+        frames = [f for f in chains.get(address, []) if f.rsplit(":", 1)[0].endswith(args.source)]
+        lines = [f.rsplit(":", 1)[1] for f in frames]
+        if not lines:
+            groups[f"[{function}]"] += cost
+            continue
+        key = lines[-1]
+        if len(lines) > 1 and key.isdigit() and int(key) in args.expand:
+            key = lines[-2]
+        groups[f"{args.source}:{key}"] += cost
+    total = sum(groups.values())
+    print(f"{total:,} instructions in all")
+    for group, cost in groups.most_common(args.top):
+        print(f"{cost / 1e6:10.1f} M {100 * cost / total:5.1f}%  {group}")
+
+
+if __name__ == "__main__":
+    main()
