@@ -71,10 +71,6 @@ pub trait Shapes {
     /// Primitive `i`'s material.
     fn material(&self, i: usize) -> u32;
 
-    /// Asks the cache for what a hit on primitive `i` will read, for a hit found now and
-    /// shaded later. A hint: nothing by default.
-    fn prefetch(&self, _i: usize) {}
-
     /// The tight box, over the whole `shutter` for moving primitives; all of space for an
     /// unbounded kind (which no structure holds).
     fn bounds(&self, i: usize, shutter: [f32; 2]) -> Aabb;

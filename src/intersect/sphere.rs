@@ -12,8 +12,7 @@ use super::{
 
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{
-    for_lanes, prefetch, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3Lanes, Vec3x8,
-    Vec3xP,
+    for_lanes, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3Lanes, Vec3x8, Vec3xP,
 };
 
 /// How the sphere test solves its quadratic.
@@ -340,12 +339,6 @@ impl Shapes for Spheres {
 
     fn material(&self, i: usize) -> u32 {
         self.records[i].material
-    }
-
-    fn prefetch(&self, i: usize) {
-        if let Some(record) = self.records.get(i) {
-            prefetch(record);
-        }
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {

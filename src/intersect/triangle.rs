@@ -30,8 +30,8 @@ use super::{
 };
 use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::simd::{
-    for_lanes, prefetch, Bits, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3Lanes,
-    Vec3x8, Vec3xP, PACKET,
+    for_lanes, Bits, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3Lanes, Vec3x8,
+    Vec3xP, PACKET,
 };
 
 /// Distance and barycentric coordinates of a ray-triangle hit: the point is
@@ -534,12 +534,6 @@ impl Shapes for Triangles {
 
     fn material(&self, i: usize) -> u32 {
         self.records[i].material
-    }
-
-    fn prefetch(&self, i: usize) {
-        if let Some(record) = self.records.get(i) {
-            prefetch(record);
-        }
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {

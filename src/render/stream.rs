@@ -182,7 +182,6 @@ fn shade_depth<'a, C: Count>(
 ) -> Queue<'a, C> {
     let n = queue.len();
     let mut hits = ArenaVec::with_capacity_in(n, arena);
-    let geometry = &shader.tracer.geometry;
     let (work, reflected) = (&mut queue.work, queue.reflected);
     stream::closest_rays_counting::<C>(shader.tracer, &queue.rays, |found, lanes| {
         if C::ON {
@@ -193,10 +192,6 @@ fn shade_depth<'a, C: Count>(
             }
         }
         hits.extend_from_slice(found);
-        // Shaded once the whole depth is traced: its record reaches the cache meanwhile.
-        for hit in found.iter().flatten() {
-            geometry.prefetch(hit.prim);
-        }
     });
     let mut blocks = HitBlocks::with_capacity_in(n, arena);
     for (i, (hit, ray)) in hits.iter().zip(&queue.rays).enumerate() {

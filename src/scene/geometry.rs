@@ -30,14 +30,6 @@ macro_rules! define_geometry {
                 }
             }
 
-            /// Asks the cache for what `prim`'s hit will read ([`Shapes::prefetch`]).
-            #[inline]
-            pub fn prefetch(&self, prim: PrimId) {
-                match prim.kind() {
-                    $(PrimKind::$kind => self.$field.prefetch(prim.index()),)*
-                }
-            }
-
             pub fn material(&self, prim: PrimId) -> u32 {
                 match prim.kind() {
                     $(PrimKind::$kind => self.$field.material(prim.index()),)*
