@@ -4,16 +4,17 @@
 Reads a callgrind profile made with `--dump-instr=yes` and puts each instruction's own
 cost at the outermost frame of SOURCE in the instruction's inline chain (addr2line -i):
 the line of SOURCE whose statement the instruction serves, however deeply the compiler
-inlined what that statement calls. Where that line is one of the `--expand` lines (a call
-that inlines a whole function, such as `stream::trace`'s call of `shade_depth`), the next
-frame of SOURCE inside it is taken instead. Instructions without a frame of SOURCE are
-grouped by the function they lie in, so that the groups add up to the whole run.
+inlined what that statement calls. Where that line calls a function named by `--expand`
+(one inlined whole, such as `stream::trace`'s call of `shade_depth`), the next frame of
+SOURCE inside it is taken instead. Instructions without a frame of SOURCE are grouped by
+the function they lie in, so that the groups add up to the whole run.
 
 BENCHMARKS.md's shading budget comes from it:
 
     valgrind --tool=callgrind --dump-instr=yes --callgrind-out-file=cg.out \\
       target/release/p3trace render SCENE --threads 1 --accel bvh --no-skybox -q -o x.png
-    scripts/inline-lines.py cg.out target/release/p3trace src/render/stream.rs --expand 141
+    scripts/inline-lines.py cg.out target/release/p3trace src/render/stream.rs \\
+      --expand shade_depth
 
 Needs binutils' addr2line and a binary with line tables (the release profile has them).
 """
@@ -32,6 +33,7 @@ def own_costs(profile):
     function = "?"
     address = 0
     after_calls = False
+    cost_field = None  # the cost's column, after the positions
 
     def named(text):
         match = re.match(r"\((\d+)\)(?: (.*))?", text)
@@ -50,21 +52,24 @@ def own_costs(profile):
 
     with open(profile, errors="replace") as lines:
         for line in lines:
-            if line.startswith("fn="):
+            if line.startswith("positions:"):
+                positions = line.split()[1:]
+                if positions[:1] != ["instr"]:
+                    return costs  # no instruction addresses: made without --dump-instr=yes
+                cost_field = len(positions)
+            elif line.startswith("fn="):
                 function = named(line[3:].strip())
             elif line.startswith("cfn="):
                 named(line[4:].strip())
             elif line.startswith("calls="):
                 after_calls = True  # the next cost line is the call's inclusive cost
-            elif line[:1].isdigit() or line[:1] in "+-*":
+            elif cost_field and (line[:1].isdigit() or line[:1] in "+-*"):
                 fields = line.split()
-                if len(fields) < 3:
-                    continue
                 address = position(fields[0], address)
                 if after_calls:
                     after_calls = False
                     continue
-                costs[(address, function)] += int(fields[2])
+                costs[(address, function)] += int(fields[cost_field])
     return costs
 
 
@@ -90,13 +95,23 @@ def inline_chains(binary, addresses):
     return chains
 
 
+def call_lines(source, functions):
+    """The numbers (as text) of the lines of `source` that call one of `functions`."""
+    if not functions:
+        return set()
+    call = re.compile(r"\b(" + "|".join(map(re.escape, functions)) + r")\(")
+    with open(source) as text:
+        return {str(number) for number, line in enumerate(text, 1)
+                if call.search(line) and not re.search(r"\bfn\s", line)}
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("profile", help="callgrind output made with --dump-instr=yes")
     parser.add_argument("binary", help="the profiled binary")
     parser.add_argument("source", help="the source file whose lines to group by")
-    parser.add_argument("--expand", type=int, action="append", default=[],
-                        help="a line of SOURCE to look inside (repeatable)")
+    parser.add_argument("--expand", action="append", default=[], metavar="FUNCTION",
+                        help="look inside SOURCE's calls of FUNCTION (repeatable)")
     parser.add_argument("--top", type=int, default=40, help="groups to print (40)")
     args = parser.parse_args()
 
@@ -104,6 +119,7 @@ def main():
     if not costs:
         sys.exit(f"inline-lines: no costs in {args.profile} (made with --dump-instr=yes?)")
     chains = inline_chains(args.binary, {address for address, _ in costs})
+    expand = call_lines(args.source, args.expand)
     groups = collections.Counter()
     for (address, function), cost in costs.items():
         frames = [f for f in chains.get(address, []) if f.rsplit(":", 1)[0].endswith(args.source)]
@@ -112,7 +128,7 @@ def main():
             groups[f"[{function}]"] += cost
             continue
         key = lines[-1]
-        if len(lines) > 1 and key.isdigit() and int(key) in args.expand:
+        if len(lines) > 1 and key in expand:
             key = lines[-2]
         groups[f"{args.source}:{key}"] += cost
     total = sum(groups.values())
