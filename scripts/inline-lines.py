@@ -73,6 +73,31 @@ def own_costs(profile):
     return costs
 
 
+def perf_costs(data, binary):
+    """Each (instruction address, function name)'s samples in a `perf record` of `binary`;
+    samples in libraries as (None, their function), in the kernel as (None, "kernel")."""
+    def symbols(*flags):
+        listing = subprocess.run(["nm", "--defined-only", "--no-sort", *flags, binary],
+                                 capture_output=True, text=True, check=True).stdout
+        return [line.split(" ", 2) for line in listing.splitlines()]
+    names = {}
+    for (address, _, raw), (_, _, plain) in zip(symbols(), symbols("-C")):
+        names[raw] = (int(address, 16), plain)
+    script = subprocess.run(["perf", "script", "-i", data, "-F", "ip,sym,symoff,dso",
+                             "--no-demangle"], capture_output=True, text=True, check=True).stdout
+    costs = collections.Counter()
+    for line in script.splitlines():
+        match = re.match(r"\s*[0-9a-f]+ (.+)\+0x([0-9a-f]+) \((.*)\)$", line)
+        if match and match.group(1) in names and match.group(3).endswith(binary.split("/")[-1]):
+            start, name = names[match.group(1)]
+            costs[(start + int(match.group(2), 16), name)] += 1
+        elif match and match.group(3) == "[kernel.kallsyms]":
+            costs[(None, "kernel")] += 1
+        else:
+            costs[(None, match.group(1) if match else "unknown")] += 1
+    return costs
+
+
 def inline_chains(binary, addresses):
     """Each address's inline chain, innermost frame first, as "path:line" strings."""
     chains = {}
@@ -113,12 +138,16 @@ def main():
     parser.add_argument("--expand", action="append", default=[], metavar="FUNCTION",
                         help="look inside SOURCE's calls of FUNCTION (repeatable)")
     parser.add_argument("--top", type=int, default=40, help="groups to print (40)")
+    parser.add_argument("--perf", action="store_true",
+                        help="PROFILE is a `perf record` of BINARY: samples, not instructions")
+    parser.add_argument("--stages", metavar="FILE",
+                        help="sum the groups into the stages of FILE (scripts/stream-stages.txt)")
     args = parser.parse_args()
 
-    costs = own_costs(args.profile)
+    costs = perf_costs(args.profile, args.binary) if args.perf else own_costs(args.profile)
     if not costs:
         sys.exit(f"inline-lines: no costs in {args.profile} (made with --dump-instr=yes?)")
-    chains = inline_chains(args.binary, {address for address, _ in costs})
+    chains = inline_chains(args.binary, {address for address, _ in costs if address is not None})
     expand = call_lines(args.source, args.expand)
     groups = collections.Counter()
     for (address, function), cost in costs.items():
@@ -132,9 +161,60 @@ def main():
             key = lines[-2]
         groups[f"{args.source}:{key}"] += cost
     total = sum(groups.values())
-    print(f"{total:,} instructions in all")
+    unit = "samples" if args.perf else "instructions"
+    print(f"{total:,} {unit} in all")
+    if args.stages:
+        print_stages(groups, read_stages(args.stages), args.source, args.top, unit)
+        return
     for group, cost in groups.most_common(args.top):
         print(f"{cost / 1e6:10.1f} M {100 * cost / total:5.1f}%  {group}")
+
+
+def read_stages(path):
+    """The (stage, compiled regex) pairs of a stage file, in its order."""
+    stages = []
+    with open(path) as lines:
+        for number, line in enumerate(lines, 1):
+            line = line.strip()
+            if not line or line.startswith("#"):
+                continue
+            stage, sep, pattern = line.partition(": ")
+            if not sep:
+                sys.exit(f"inline-lines: {path}:{number}: expected 'stage: regex'")
+            stages.append((stage, re.compile(pattern)))
+    return stages
+
+
+def print_stages(groups, stages, source, top, unit):
+    """Each stage's cost and share of the groups outside stage "-", then the
+    groups no stage takes."""
+    with open(source) as text:
+        source_lines = [line.strip() for line in text]
+    sums = collections.Counter()
+    unassigned = collections.Counter()
+    for group, cost in groups.items():
+        prefix = f"{source}:"
+        if group.startswith(prefix):
+            number = group[len(prefix):]
+            subject = source_lines[int(number) - 1] if number.isdigit() else "?"
+        else:
+            subject = group
+        stage = next((name for name, pattern in stages if pattern.search(subject)), None)
+        if stage is None:
+            unassigned[group] += cost
+        else:
+            sums[stage] += cost
+    loop = sum(groups.values()) - sums["-"]
+    print(f"{loop:,} {unit} in the stages' loop (all but stage -)")
+    def amount(cost):
+        return f"{cost / 1e6:10.1f} M" if unit == "instructions" else f"{cost:12,}"
+    for stage, cost in sums.most_common():
+        if stage != "-":
+            print(f"{amount(cost)} {100 * cost / loop:5.1f}%  {stage}")
+    rest = sum(unassigned.values())
+    print(f"{amount(rest)} {100 * rest / loop:5.1f}%  unassigned:")
+    for group, cost in unassigned.most_common(top):
+        print(f"    {amount(cost)}  {group}")
 
 
 if __name__ == "__main__":

@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# The stream renderer's tile loop by stage (BENCHMARKS.md, issue 33): one render of SCENE
+# (1 thread, SAH BVH, no skybox), its instructions counted by callgrind and its time
+# sampled by perf, each instruction or sample put at the line of render/stream.rs whose
+# statement it serves through every inlined call (scripts/inline-lines.py), and the lines
+# summed into the stages of scripts/stream-stages.txt. Prints a Markdown table; with
+# --time, the time alone (no callgrind, which takes fifty times the render).
+# Usage: scripts/stage-table.sh [--time] [SHARED_DIR] [SCENE] [SPP] [RESOLUTION]
+#        (default ../shared mount_very_high 16, and the scene's own resolution)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+time_only=false
+if [ "${1:-}" = --time ]; then time_only=true; shift; fi
+shared=${1:-../shared}
+scene=${2:-mount_very_high}
+spp=${3:-16}
+resolution=${4:+--resolution $4}
+for tool in perf valgrind addr2line; do
+  command -v "$tool" >/dev/null || { echo "stage-table: $tool is missing" >&2; exit 2; }
+done
+cargo build --release --quiet
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+binary=$out/p3trace   # a copy, so that a rebuild meanwhile cannot part the profiles
+cp target/release/p3trace "$binary"
+render=("$binary" render "$shared/scenes/$scene.p3f" --threads 1 --accel bvh --no-skybox -q
+        --spp "$spp" $resolution -o "$out/image.png")
+perf record -q -e cpu-clock -F 20000 -o "$out/perf.data" -- "${render[@]}" 2>/dev/null
+stages() {
+  scripts/inline-lines.py "$@" "$binary" src/render/stream.rs --expand shade_depth \
+    --stages scripts/stream-stages.txt --top 0
+}
+stages --perf "$out/perf.data" >"$out/time"
+if $time_only; then
+  cp "$out/time" "$out/instructions"
+else
+  valgrind --tool=callgrind --dump-instr=yes --callgrind-out-file="$out/cg.out" "${render[@]}" \
+    2>/dev/null
+  stages "$out/cg.out" >"$out/instructions"
+fi
+python3 - "$out/instructions" "$out/time" "$scene, ${4:-its resolution}, $spp spp" $time_only <<'PY'
+import re, sys
+def shares(path):
+    """The loop's size and each stage's share, in the file's order."""
+    lines = open(path).read().splitlines()
+    size = lines[1].split()[0]
+    rows = {}
+    for line in lines[2:]:
+        match = re.match(r"\s*[\d.,]+(?: M)?\s+([\d.]+)%\s+(.*?):?$", line)
+        if match:
+            rows[match.group(2)] = match.group(1) + "%"
+    return size, rows
+(instructions, by_count), (samples, by_time) = shares(sys.argv[1]), shares(sys.argv[2])
+time_only = sys.argv[4] == "true"
+counts = "" if time_only else f"{instructions} instructions and "
+print(f"{sys.argv[3]}: {counts}{samples} samples (20 kHz) in the tile loop\n")
+print("| stage | time |" if time_only else "| stage | instructions | time |")
+print("|---|---|" if time_only else "|---|---|---|")
+for stage, share in by_time.items() if time_only else by_count.items():
+    print(f"| {stage} | {share} |" if time_only else f"| {stage} | {share} | {by_time.get(stage, '-')} |")
+PY
