@@ -8,7 +8,7 @@
 //! beside whatever the accelerator returns.
 //!
 //! All structures return exactly the hit of brute force: the smallest `t`, and at equal
-//! `t` the smallest [`PrimId`](crate::prim::PrimId) ([`ClosestHit`] keeps that rule), so
+//! `t` the smallest [`PrimId`] ([`ClosestHit`] keeps that rule), so
 //! the images of every structure are the same byte for byte.
 //!
 //! [`Tracer`] answers a ray whose origin is not finite, or whose direction is zero or not
@@ -31,11 +31,11 @@ mod structure;
 use std::time::{Duration, Instant};
 
 use crate::intersect::{IntersectOptions, PacketQuery, RayQuery, SphereRoots};
-use crate::prim::PrimKind;
+use crate::prim::{PrimId, PrimKind};
 use crate::ray::{Hit, Ray, RayPacket};
 pub use crate::scene::AccelKind;
 use crate::scene::Geometry;
-use crate::simd::{Bits, F32xP, LaneBits, PACKET};
+use crate::simd::{Bits, F32x8, F32xP, LaneBits, Mask8, Vec3x8, PACKET};
 use bvh2::Bvh2;
 pub use bvh2::BvhBuild;
 use bvh8::Bvh8;
@@ -330,6 +330,35 @@ impl<'s> Tracer<'s> {
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         self.occluded_counting(ray, t_min, t_max, &mut NoCount)
+    }
+
+    /// Whether `prim` alone blocks `ray` within `(t_min, t_max)`, by its own test: where it
+    /// does, [`Tracer::occluded`] and [`Tracer::occluded_packet`] answer yes too, as every
+    /// structure finds what testing each primitive finds. [`Tracer::occluded_by_spheres8`]
+    /// is its eight-lane twin.
+    pub fn occluded_by(&self, prim: PrimId, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        let query = RayQuery::new(ray, t_min, self.options);
+        ray.is_traceable() && self.geometry.intersect(prim, &query, t_max).is_some()
+    }
+
+    /// [`Tracer::occluded_by`] for eight rays, lane `k` the ray from `origin[k]` along
+    /// `dir[k]` within `(t_min, t_max[k])` against sphere `indices[k]`. A shadow ray that
+    /// leaves a sphere from inside meets it again before any light outside it: the
+    /// renderer answers those so, without a walk.
+    #[inline]
+    pub fn occluded_by_spheres8(
+        &self,
+        indices: [usize; 8],
+        (origin, dir): (Vec3x8, Vec3x8),
+        t_min: f32,
+        t_max: F32x8,
+    ) -> Mask8 {
+        let finite = |v: Vec3x8| v.x.is_finite() & v.y.is_finite() & v.z.is_finite();
+        let zero = F32x8::ZERO;
+        let still = dir.x.eq(zero) & dir.y.eq(zero) & dir.z.eq(zero);
+        let traceable = (finite(origin) & finite(dir)).and_not(still);
+        let spheres = &self.geometry.spheres;
+        traceable & spheres.hit_lanes8(indices, (origin, dir), t_min, t_max, self.options)
     }
 
     /// [`Tracer::occluded`], its work counted into `count`.

@@ -186,6 +186,33 @@ impl BoxRay {
     }
 }
 
+/// [`BoxRay::holds`] for eight rays and eight boxes, lane by lane: ray `k` (from
+/// `origin[k]`, with `inv_dir[k] = 1 / dir[k]`) against box `k` of `boxes`, with the hit
+/// `t[k]`, from `t_min`.
+#[inline]
+pub fn holds_lanes8(
+    origin: Vec3x8,
+    inv_dir: Vec3x8,
+    boxes: &BoxPack8,
+    t_min: f32,
+    t: F32x8,
+) -> Mask8 {
+    let clamp = |t: F32x8| t.max(F32x8::splat(-f32::MAX)).min(F32x8::splat(f32::MAX));
+    let lanes = Lanes {
+        origin,
+        inv_dir: Vec3x8 {
+            x: clamp(inv_dir.x),
+            y: clamp(inv_dir.y),
+            z: clamp(inv_dir.z),
+        },
+        min: boxes.min,
+        max: boxes.max,
+        t_min: F32x8::splat(t_min),
+        t_max: F32x8::splat(f32::INFINITY),
+    };
+    lanes.clip().holds(t)
+}
+
 /// A packet's rays set up for box tests together: [`BoxRay`] lane by lane.
 #[derive(Clone, Copy, Debug)]
 pub struct BoxRays {

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::{first_root_in, first_root_in_lanes};
+use super::{first_root_in, first_root_in_lanes, holds_lanes8};
 use super::{
     gamma, trusted_box, Aabb, BoxPack8, Hits8, IntersectOptions, LeafPack, PacketHits, PacketQuery,
     RayQuery, Shapes, SurfacePoint, SurfacePoint8, TriangleHit, TriangleHit8,
@@ -217,6 +217,42 @@ impl Spheres {
             radius,
             material,
         });
+    }
+
+    /// Eight rays against eight spheres, lane by lane: whether sphere `indices[k]` holds a
+    /// hit of the ray from `origin[k]` along `dir[k]` within `(t_min, t_max[k])`, bit for
+    /// bit as [`Shapes::intersect`] answers it (its roots, then its trusted box).
+    #[inline]
+    pub fn hit_lanes8(
+        &self,
+        indices: [usize; 8],
+        (origin, dir): (Vec3x8, Vec3x8),
+        t_min: f32,
+        t_max: F32x8,
+        options: IntersectOptions,
+    ) -> Mask8 {
+        let records = indices.map(|i| &self.records[i]);
+        let centre = Vec3x8::from_lanes(records.map(|r| r.centre));
+        let radius = F32x8::from_array(records.map(|r| r.radius));
+        let lanes_min = F32x8::splat(t_min);
+        let (hit, t) = match options.sphere_roots {
+            SphereRoots::Precise => {
+                sphere_lanes::<_, false>(origin, dir, centre, radius, lanes_min, t_max)
+            }
+            SphereRoots::Textbook => {
+                sphere_lanes::<_, true>(origin, dir, centre, radius, lanes_min, t_max)
+            }
+        };
+        if hit.none() {
+            return hit;
+        }
+        let reach = Vec3x8::splat(Vec3::ONE).scale(radius.abs());
+        let tight = BoxPack8 {
+            min: centre - reach,
+            max: centre + reach,
+        };
+        let (trusted, some) = tight.trusted(options.sphere_margin);
+        hit & some & holds_lanes8(origin, dir.recip(), &trusted, t_min, t)
     }
 }
 

@@ -5,7 +5,9 @@
 //! and the rays they spawn make the next depth's queue. A depth's hits are gathered eight
 //! to a [`HitBlock`] (structure of arrays), whose points are recomputed on the surfaces
 //! ([`Shader::hit_points8`]) and offset off them ([`spawn_origin8`]), whose shadow rays
-//! are set up ([`crate::render::light::Emitter::sample8`]), whose Blinn-Phong sums are
+//! are set up ([`crate::render::light::Emitter::sample8`]; one that leaves a sphere from
+//! inside is answered by that sphere's test alone, as the walk would answer it:
+//! [`crate::accel::Tracer::occluded_by_spheres8`]), whose Blinn-Phong sums are
 //! taken ([`super::shade::Phong8`]) and whose reflected and transmitted rays are made
 //! ([`Bounce8`]) eight lanes at a time, light by light in the scalar order, bit for bit
 //! as the scalar path. A depth queues its reflected rays, then its transmitted ones. Once
@@ -304,6 +306,11 @@ struct HitBlock {
     lanes: u8,
     /// The lanes whose ray arrived from inside the surface.
     inside: u8,
+    /// The lanes whose ray arrived from inside a sphere, where every lane hit one
+    /// (their shadow rays meet it again: [`crate::accel::Tracer::occluded_by_spheres8`]),
+    /// and each lane's primitive.
+    enclosed: u8,
+    prim: [PrimId; 8],
     /// Whether the points have error bounds (all but with the `course` profile).
     bounded: bool,
     /// Each lane's index in the depth's queue.
@@ -344,6 +351,12 @@ impl HitBlock {
         let mut block = HitBlock {
             lanes: ((1u16 << count) - 1) as u8,
             inside: inside.bitmask(),
+            enclosed: if kind == Some(PrimKind::Sphere) {
+                inside.bitmask()
+            } else {
+                0
+            },
+            prim: prims,
             bounded: shader.options.profile == Profile::Standard,
             ray: *ray,
             material: geometry.materials8(kind, prims),
@@ -484,15 +497,37 @@ impl<'a> ShadowQueue<'a> {
                 let (facing, incident) = emitter.sample8(index, &receiver, sample);
                 let facing = facing.bitmask() & block.lanes;
                 let entry = lit.len() as u32;
+                let ray = |k: usize| Ray {
+                    origin: block.origin.lane(k),
+                    dir: incident.dir.lane(k),
+                    time: block.time.lane(k),
+                };
+                // A ray that leaves a sphere from inside is answered by that sphere's
+                // test, as the walk would answer it, without the walk.
+                let mut walked = facing;
+                if facing & block.enclosed != 0 {
+                    let own = shader.tracer.occluded_by_spheres8(
+                        block.prim.map(|p| p.index()),
+                        (block.origin, incident.dir),
+                        0.0,
+                        incident.distance,
+                    );
+                    let answered = facing & block.enclosed & own.bitmask();
+                    walked &= !answered;
+                    if C::ON {
+                        // Each such ray, and its one primitive test.
+                        for_lanes(answered, |k| {
+                            let mut count = C::default();
+                            count.ray();
+                            count.prims(1);
+                            counted(entry << 3 | k as u32, count);
+                        });
+                    }
+                }
                 dir.push(incident.dir);
-                lit.push(facing);
+                lit.push(walked);
                 traced += u64::from(facing.count_ones());
-                for_lanes(facing, |k| {
-                    let ray = Ray {
-                        origin: block.origin.lane(k),
-                        dir: incident.dir.lane(k),
-                        time: block.time.lane(k),
-                    };
+                for_lanes(walked, |k| {
                     // The ray's entry (light and block) and lane, for `unlit`.
                     let tag = entry << 3 | k as u32;
                     let distance = incident.distance.lane(k);
@@ -500,7 +535,7 @@ impl<'a> ShadowQueue<'a> {
                         blocked: |tag| unlit(&mut lit, tag),
                         counted: &mut counted,
                     };
-                    packer.push(&ray, distance, tag, &mut answer);
+                    packer.push(&ray(k), distance, tag, &mut answer);
                 });
             }
         }

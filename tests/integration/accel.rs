@@ -10,12 +10,12 @@ use p3trace::accel::stream::{self, Occlusions, Query};
 use p3trace::accel::{AccelKind, AccelOptions, Tracer};
 use p3trace::accel::{BvhBuild, BvhWidth};
 use p3trace::intersect::{self, IntersectOptions, SphereRoots};
-use p3trace::prim::PrimKind;
+use p3trace::prim::{PrimId, PrimKind};
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::{render, RenderOptions};
 use p3trace::scene::p3f::parse_text;
 use p3trace::scene::{parse_file, Scene};
-use p3trace::simd::{Bits, LaneBits, PACKET};
+use p3trace::simd::{Bits, F32x8, LaneBits, Vec3x8, PACKET};
 use proptest::prelude::*;
 
 /// Every structure and option the renderer can run, but brute force.
@@ -277,6 +277,50 @@ proptest! {
                         "{} lane {} occluded, {:?} t_max {}", name, k, rays[k], t_max[k]
                     );
                 }
+            }
+        }
+    }
+
+    /// The renderer answers a shadow ray that leaves a sphere from inside by that sphere's
+    /// test alone (`Tracer::occluded_by_spheres8`, eight lanes, against its scalar twin
+    /// `occluded_by`): wherever that says blocked, every structure's walk says so too.
+    #[test]
+    fn a_sphere_blocks_its_own_rays_as_every_walk_does(
+        scene in scene(),
+        (rays, _, t_max) in packet(),
+        picks in prop::array::uniform8(any::<prop::sample::Index>()),
+        depth in prop::array::uniform8(prop_oneof![Just(0.5f32), 0.0f32..1.5]),
+    ) {
+        let g = &scene.geometry;
+        let spheres = &g.spheres.records;
+        prop_assume!(!spheres.is_empty());
+        let indices = picks.map(|pick| pick.index(spheres.len()));
+        // Each ray starts at `depth` radii from its sphere's centre: inside, mostly.
+        let rays: [Ray; 8] = std::array::from_fn(|k| {
+            let sphere = spheres[indices[k]];
+            let towards = rays[(k + 1) % PACKET].dir.normalize_or_zero();
+            let origin = sphere.centre + depth[k] * sphere.radius * towards;
+            Ray { origin, ..rays[k] }
+        });
+        let tracers: Vec<Tracer> = std::iter::once(AccelOptions::brute_force())
+            .chain(structures())
+            .map(|options| Tracer::new(g, &options))
+            .collect();
+        let lanes = (
+            Vec3x8::from_fn(|k| rays[k].origin),
+            Vec3x8::from_fn(|k| rays[k].dir),
+        );
+        let t_max = F32x8::from_array(std::array::from_fn(|k| t_max[k]));
+        let blocked = tracers[0].occluded_by_spheres8(indices, lanes, 0.0, t_max).bitmask();
+        for k in 0..8 {
+            let prim = PrimId::new(PrimKind::Sphere, indices[k] as u32);
+            let alone = tracers[0].occluded_by(prim, &rays[k], 0.0, t_max.lane(k));
+            prop_assert_eq!(blocked >> k & 1 == 1, alone, "lane {}: {:?}", k, rays[k]);
+            for tracer in tracers.iter().filter(|_| alone) {
+                prop_assert!(
+                    tracer.occluded(&rays[k], 0.0, t_max.lane(k)),
+                    "{} lane {}: {:?}", tracer.name(), k, rays[k]
+                );
             }
         }
     }

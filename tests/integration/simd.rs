@@ -534,6 +534,47 @@ proptest! {
             let scalar = lane.holds(lo, hi, p.t_min[k], hit);
             prop_assert_eq!(one_box >> k & 1 == 1, scalar, "one box, ray {}", k);
         }
+        // Eight rays against eight boxes, ray k against box k.
+        let eight_boxes: [(Vec3, Vec3); 8] = std::array::from_fn(|k| boxes[k % boxes.len()]);
+        let origin = Vec3x8::from_fn(|k| p.rays[k].origin);
+        let inv_dir = Vec3x8::from_fn(|k| p.rays[k].dir.recip());
+        let lanes = intersect::holds_lanes8(
+            origin, inv_dir, &BoxPack8::new(&eight_boxes), p.t_min[0], eight,
+        ).bitmask();
+        for (k, &(lo, hi)) in eight_boxes.iter().enumerate() {
+            let lane = BoxRay::new(p.rays[k].origin, p.rays[k].dir.recip());
+            let scalar = lane.holds(lo, hi, p.t_min[0], hits[k]);
+            prop_assert_eq!(lanes >> k & 1 == 1, scalar, "ray and box {}", k);
+        }
+    }
+
+    /// `Spheres::hit_lanes8` (eight rays against eight spheres, lane by lane) against
+    /// `Shapes::intersect`: both root forms, with and without the margin.
+    #[test]
+    fn sphere_hit_lanes8_equal_scalar(
+        rays in prop::array::uniform8(ray()),
+        spheres in prop::collection::vec((point(), radius()), 1..=8),
+        order in prop::array::uniform8(0usize..8),
+        t_min in prop::sample::select(vec![0.0f32, 1e-4]),
+        t_max in prop::array::uniform8(prop_oneof![Just(INF), 0.0f32..12.0, Just(NAN)]),
+        roots in roots(),
+        sphere_margin in prop_oneof![Just(0.0f32), 0.0f32..4.0],
+    ) {
+        let mut storage = Spheres::default();
+        for &(centre, r) in &spheres {
+            storage.push(centre, r, 0);
+        }
+        let options = IntersectOptions { sphere_roots: roots, sphere_margin };
+        let indices = order.map(|i| i % spheres.len());
+        let lanes = (Vec3x8::from_fn(|k| rays[k].origin), Vec3x8::from_fn(|k| rays[k].dir));
+        let hit = storage
+            .hit_lanes8(indices, lanes, t_min, F32x8::from_fn(|k| t_max[k]), options)
+            .bitmask();
+        for k in 0..8 {
+            let query = RayQuery::new(&rays[k], t_min, options);
+            let scalar = storage.intersect(indices[k], &query, t_max[k]).is_some();
+            prop_assert_eq!(hit >> k & 1 == 1, scalar, "lane {}: {:?}", k, rays[k]);
+        }
     }
 
     /// `BoxPack8::trusted` against `trusted_box`, box by box, on corners that are not
