@@ -7,7 +7,8 @@ the line of SOURCE whose statement the instruction serves, however deeply the co
 inlined what that statement calls. Where that line calls a function named by `--expand`
 (one inlined whole, such as `stream::trace`'s call of `shade_depth`), the next frame of
 SOURCE inside it is taken instead. Instructions without a frame of SOURCE are grouped by
-the function they lie in, so that the groups add up to the whole run.
+the function they lie in (or, inside another crate's function, by the outermost line of
+the project's own sources inlined there), so that the groups add up to the whole run.
 
 BENCHMARKS.md's shading budget comes from it:
 
@@ -151,10 +152,11 @@ def main():
     expand = call_lines(args.source, args.expand)
     groups = collections.Counter()
     for (address, function), cost in costs.items():
-        frames = [f for f in chains.get(address, []) if f.rsplit(":", 1)[0].endswith(args.source)]
+        chain = chains.get(address, [])
+        frames = [f for f in chain if f.rsplit(":", 1)[0].endswith(args.source)]
         lines = [f.rsplit(":", 1)[1] for f in frames]
         if not lines:
-            groups[f"[{function}]"] += cost
+            groups[outside_group(function, chain, args.source)] += cost
             continue
         key = lines[-1]
         if len(lines) > 1 and key in expand:
@@ -168,6 +170,23 @@ def main():
         return
     for group, cost in groups.most_common(args.top):
         print(f"{cost / 1e6:10.1f} M {100 * cost / total:5.1f}%  {group}")
+
+
+def outside_group(function, chain, source):
+    """The group of an instruction without a frame of SOURCE: its function, or where that
+    is another crate's (an iterator's fold, a thread pool's loop, into which the compiler
+    inlined the project's code), the innermost line of its inline chain in the file of the
+    chain's outermost frame of the project's own sources, as "[path:line]" from the source
+    folder of SOURCE on (render/mod.rs's lines, inside rayon's loop over the tiles)."""
+    if function.startswith(("p3trace::", "<p3trace::")):
+        return f"[{function}]"
+    root = source.split("/")[0] + "/"  # "src/"
+    own = [f for f in chain if f"/{root}" in f and "/.cargo/" not in f and "/rustc/" not in f]
+    if not own:
+        return f"[{function}]"
+    outer_file = own[-1].rsplit(":", 1)[0]
+    line = next(f for f in own if f.rsplit(":", 1)[0] == outer_file)
+    return "[" + root + line.split(f"/{root}", 1)[1] + "]"
 
 
 def read_stages(path):
