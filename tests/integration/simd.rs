@@ -511,8 +511,8 @@ proptest! {
         }
     }
 
-    /// The hit rule's box test, one ray against eight boxes and eight rays against one,
-    /// lane by lane `BoxRay::holds`.
+    /// The hit rule's box test, one ray against eight boxes, eight rays against one and
+    /// eight rays against eight boxes, lane by lane `BoxRay::holds`.
     #[test]
     fn box_holds_equal_scalar(
         p in packet(),
