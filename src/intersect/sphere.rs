@@ -246,12 +246,7 @@ impl Spheres {
         if hit.none() {
             return hit;
         }
-        let reach = Vec3x8::splat(Vec3::ONE).scale(radius.abs());
-        let tight = BoxPack8 {
-            min: centre - reach,
-            max: centre + reach,
-        };
-        let (trusted, some) = tight.trusted(options.sphere_margin);
+        let (trusted, some) = trusted_sphere_boxes8(centre, radius, options);
         hit & some & holds_lanes8(origin, dir.recip(), &trusted, t_min, t)
     }
 }
@@ -274,12 +269,7 @@ impl LeafPack for Spheres {
         if hit.none() {
             return TriangleHit8::at((hit, t));
         }
-        let reach = Vec3x8::splat(Vec3::ONE).scale(pack.radius.abs());
-        let tight = BoxPack8 {
-            min: pack.centre - reach,
-            max: pack.centre + reach,
-        };
-        let trusted = tight.trusted(query.options.sphere_margin);
+        let trusted = trusted_sphere_boxes8(pack.centre, pack.radius, query.options);
         TriangleHit8::at((hit & query.holds8(trusted, t), t))
     }
 
@@ -328,6 +318,21 @@ pub(super) fn trusted_sphere_box(
     options: IntersectOptions,
 ) -> Option<Aabb> {
     trusted_box(sphere_bounds(centre, radius), options.sphere_margin)
+}
+
+/// [`trusted_sphere_box`] of eight spheres, with the lanes where it is `Some`.
+#[inline(always)]
+fn trusted_sphere_boxes8(
+    centre: Vec3x8,
+    radius: F32x8,
+    options: IntersectOptions,
+) -> (BoxPack8, Mask8) {
+    let reach = Vec3x8::splat(Vec3::ONE).scale(radius.abs());
+    let tight = BoxPack8 {
+        min: centre - reach,
+        max: centre + reach,
+    };
+    tight.trusted(options.sphere_margin)
 }
 
 /// [`Shapes::surface_point`] of a sphere. The hit's offset from the centre is taken as
