@@ -211,8 +211,8 @@ def print_stages(groups, stages, source, top, unit):
         source_lines = [line.strip() for line in text]
     sums = collections.Counter()
     unassigned = collections.Counter()
+    prefix = f"{source}:"
     for group, cost in groups.items():
-        prefix = f"{source}:"
         if group.startswith(prefix):
             number = group[len(prefix):]
             subject = source_lines[int(number) - 1] if number.isdigit() else "?"

@@ -31,15 +31,13 @@ stages() {
     --stages scripts/stream-stages.txt --top 0
 }
 stages --perf "$out/perf.data" >"$out/time"
-if $time_only; then
-  cp "$out/time" "$out/instructions"
-else
+if ! $time_only; then
   valgrind --tool=callgrind --dump-instr=yes --callgrind-out-file="$out/cg.out" "${render[@]}" \
     2>/dev/null
   stages "$out/cg.out" >"$out/instructions"
 fi
-python3 - "$out/instructions" "$out/time" "$scene, ${4:-its resolution}, $spp spp" $time_only <<'PY'
-import re, sys
+python3 - "$out/time" "$out/instructions" "$scene, ${4:-its resolution}, $spp spp" <<'PY'
+import os, re, sys
 def shares(path):
     """The loop's size and each stage's share, in the file's order."""
     lines = open(path).read().splitlines()
@@ -50,12 +48,16 @@ def shares(path):
         if match:
             rows[match.group(2)] = match.group(1) + "%"
     return size, rows
-(instructions, by_count), (samples, by_time) = shares(sys.argv[1]), shares(sys.argv[2])
-time_only = sys.argv[4] == "true"
-counts = "" if time_only else f"{instructions} instructions and "
-print(f"{sys.argv[3]}: {counts}{samples} samples (20 kHz) in the tile loop\n")
-print("| stage | time |" if time_only else "| stage | instructions | time |")
-print("|---|---|" if time_only else "|---|---|---|")
-for stage, share in by_time.items() if time_only else by_count.items():
-    print(f"| {stage} | {share} |" if time_only else f"| {stage} | {share} | {by_time.get(stage, '-')} |")
+samples, by_time = shares(sys.argv[1])
+columns = [by_time]
+heading = f"{samples} samples (20 kHz)"
+if os.path.exists(sys.argv[2]):
+    instructions, by_count = shares(sys.argv[2])
+    columns.insert(0, by_count)
+    heading = f"{instructions} instructions and {heading}"
+print(f"{sys.argv[3]}: {heading} in the tile loop\n")
+print("| stage | " + ("instructions | " if len(columns) == 2 else "") + "time |")
+print("|---" * (len(columns) + 1) + "|")
+for stage in columns[0]:
+    print(f"| {stage} | " + " | ".join(column.get(stage, "-") for column in columns) + " |")
 PY

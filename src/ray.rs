@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use crate::prim::PrimId;
-use crate::simd::{Bits, F32xP, Floats, LaneBits, Vec3xP, PACKET};
+use crate::simd::{Bits, F32xP, Floats, LaneBits, Vec3Lanes, Vec3xP, PACKET};
 
 /// A ray `origin + t * dir`. `dir` is unit length wherever the renderer makes rays: the
 /// intersection routines rely on it (the sphere test skips the `dot(d, d)` term).
@@ -33,6 +33,15 @@ impl Ray {
     pub fn is_traceable(&self) -> bool {
         self.origin.is_finite() && self.dir.is_finite() && self.dir != Vec3::ZERO
     }
+}
+
+/// [`Ray::is_traceable`] lane by lane, for the rays from `origin` along `dir`.
+#[inline]
+pub fn traceable_lanes<F: Floats>(origin: Vec3Lanes<F>, dir: Vec3Lanes<F>) -> F::Mask {
+    let finite = |v: Vec3Lanes<F>| v.x.is_finite() & v.y.is_finite() & v.z.is_finite();
+    let zero = F::splat(0.0);
+    let dir_zero = dir.x.eq(zero) & dir.y.eq(zero) & dir.z.eq(zero);
+    finite(origin) & finite(dir) & !dir_zero
 }
 
 /// [`PACKET`] rays traced together (Embree's `RayK`: 8, or 16 in an AVX-512 build), the
@@ -103,12 +112,9 @@ impl<'r> RayPacket<'r> {
         self
     }
 
-    /// The lanes whose ray [`Ray::is_traceable`] (its lane-wise twin), as a bit mask.
+    /// The lanes whose ray [`Ray::is_traceable`] ([`traceable_lanes`]), as a bit mask.
     pub fn traceable(&self) -> LaneBits {
-        let finite = |v: Vec3xP| v.x.is_finite() & v.y.is_finite() & v.z.is_finite();
-        let zero = F32xP::splat(0.0);
-        let dir_zero = self.dir.x.eq(zero) & self.dir.y.eq(zero) & self.dir.z.eq(zero);
-        (finite(self.origin) & finite(self.dir) & !dir_zero).bitmask()
+        traceable_lanes(self.origin, self.dir).bitmask()
     }
 
     /// Each lane's `1 / dir`, as the single-ray routines take it.

@@ -32,7 +32,7 @@ use std::time::{Duration, Instant};
 
 use crate::intersect::{IntersectOptions, PacketQuery, RayQuery, SphereRoots};
 use crate::prim::{PrimId, PrimKind};
-use crate::ray::{Hit, Ray, RayPacket};
+use crate::ray::{traceable_lanes, Hit, Ray, RayPacket};
 pub use crate::scene::AccelKind;
 use crate::scene::Geometry;
 use crate::simd::{Bits, F32x8, F32xP, LaneBits, Mask8, Vec3x8, PACKET};
@@ -353,12 +353,9 @@ impl<'s> Tracer<'s> {
         t_min: f32,
         t_max: F32x8,
     ) -> Mask8 {
-        let finite = |v: Vec3x8| v.x.is_finite() & v.y.is_finite() & v.z.is_finite();
-        let zero = F32x8::ZERO;
-        let still = dir.x.eq(zero) & dir.y.eq(zero) & dir.z.eq(zero);
-        let traceable = (finite(origin) & finite(dir)).and_not(still);
         let spheres = &self.geometry.spheres;
-        traceable & spheres.hit_lanes8(indices, (origin, dir), t_min, t_max, self.options)
+        let hit = spheres.hit_lanes8(indices, (origin, dir), t_min, t_max, self.options);
+        traceable_lanes(origin, dir) & hit
     }
 
     /// [`Tracer::occluded`], its work counted into `count`.

@@ -123,6 +123,18 @@ fn clamp_infinite(t: f32) -> f32 {
     lesser(greater(t, -f32::MAX), f32::MAX)
 }
 
+/// [`clamp_infinite`] on each lane of each component (`maxps` and `minps` take the same
+/// branches as `greater` and `lesser`).
+#[inline(always)]
+fn clamp_infinite_lanes<F: Floats>(v: Vec3Lanes<F>) -> Vec3Lanes<F> {
+    let clamp = |t: F| t.max(F::splat(-f32::MAX)).min(F::splat(f32::MAX));
+    Vec3Lanes {
+        x: clamp(v.x),
+        y: clamp(v.y),
+        z: clamp(v.z),
+    }
+}
+
 impl BoxRay {
     /// The setup of the ray from `origin` with `inv_dir = 1 / dir`.
     #[inline]
@@ -197,14 +209,9 @@ pub fn holds_lanes8(
     t_min: f32,
     t: F32x8,
 ) -> Mask8 {
-    let clamp = |t: F32x8| t.max(F32x8::splat(-f32::MAX)).min(F32x8::splat(f32::MAX));
     let lanes = Lanes {
         origin,
-        inv_dir: Vec3x8 {
-            x: clamp(inv_dir.x),
-            y: clamp(inv_dir.y),
-            z: clamp(inv_dir.z),
-        },
+        inv_dir: clamp_infinite_lanes(inv_dir),
         min: boxes.min,
         max: boxes.max,
         t_min: F32x8::splat(t_min),
@@ -225,15 +232,9 @@ impl BoxRays {
     /// The setup of the packet's rays, with the `inv_dir` it holds.
     #[inline]
     pub fn new(rays: &RayPacket) -> Self {
-        let clamp = |t: F32xP| t.max(F32xP::splat(-f32::MAX)).min(F32xP::splat(f32::MAX));
-        let inv = rays.inv_dir;
         BoxRays {
             origin: rays.origin,
-            inv_dir: Vec3xP {
-                x: clamp(inv.x),
-                y: clamp(inv.y),
-                z: clamp(inv.z),
-            },
+            inv_dir: clamp_infinite_lanes(rays.inv_dir),
         }
     }
 

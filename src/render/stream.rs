@@ -505,14 +505,15 @@ impl<'a> ShadowQueue<'a> {
                 // A ray that leaves a sphere from inside is answered by that sphere's
                 // test, as the walk would answer it, without the walk.
                 let mut walked = facing;
-                if facing & block.enclosed != 0 {
+                let enclosed = facing & block.enclosed;
+                if enclosed != 0 {
                     let own = shader.tracer.occluded_by_spheres8(
                         block.prim.map(|p| p.index()),
                         (block.origin, incident.dir),
                         0.0,
                         incident.distance,
                     );
-                    let answered = facing & block.enclosed & own.bitmask();
+                    let answered = enclosed & own.bitmask();
                     walked &= !answered;
                     if C::ON {
                         // Each such ray, and its one primitive test.
