@@ -354,7 +354,7 @@ impl<'s> Tracer<'s> {
         t_max: F32x8,
     ) -> Mask8 {
         let spheres = &self.geometry.spheres;
-        let hit = spheres.hit_lanes8(indices, (origin, dir), t_min, t_max, self.options);
+        let (hit, _) = spheres.hit_lanes8(indices, (origin, dir), t_min, t_max, self.options);
         traceable_lanes(origin, dir) & hit
     }
 

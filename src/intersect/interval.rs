@@ -209,6 +209,18 @@ pub fn holds_lanes8(
     t_min: f32,
     t: F32x8,
 ) -> Mask8 {
+    intervals_lanes8(origin, inv_dir, boxes, t_min).holds(t)
+}
+
+/// [`BoxRay::interval`] over `(t_min, inf)` for eight rays and eight boxes, paired lane by
+/// lane as [`holds_lanes8`] pairs them.
+#[inline]
+pub fn intervals_lanes8(
+    origin: Vec3x8,
+    inv_dir: Vec3x8,
+    boxes: &BoxPack8,
+    t_min: f32,
+) -> Intervals8 {
     let lanes = Lanes {
         origin,
         inv_dir: clamp_infinite_lanes(inv_dir),
@@ -217,7 +229,7 @@ pub fn holds_lanes8(
         t_min: F32x8::splat(t_min),
         t_max: F32x8::splat(f32::INFINITY),
     };
-    lanes.clip().holds(t)
+    lanes.clip()
 }
 
 /// A packet's rays set up for box tests together: [`BoxRay`] lane by lane.

@@ -37,8 +37,8 @@ pub use aabb::{aabb, aabb_leaf, aabb_normal, aabb_packet, BoxPack8, Boxes};
 pub use bounds::{trusted_box, Aabb};
 pub use cone::{cone, cone_normal, cone_packet, Cones};
 pub use interval::{
-    beyond, beyond_lanes, holds_lanes8, widen_entry, widen_exit, BoxRay, BoxRays, Intervals,
-    Intervals8, RayRange,
+    beyond, beyond_lanes, holds_lanes8, intervals_lanes8, widen_entry, widen_exit, BoxRay, BoxRays,
+    Intervals, Intervals8, RayRange,
 };
 pub use moving_sphere::MovingSpheres;
 pub use plane::{plane, plane_packet, Planes};

@@ -220,35 +220,74 @@ impl Spheres {
     }
 
     /// Eight rays against eight spheres, lane by lane: whether sphere `indices[k]` holds a
-    /// hit of the ray from `origin[k]` along `dir[k]` within `(t_min, t_max[k])`, bit for
-    /// bit as [`Shapes::intersect`] answers it (its roots, then its trusted box).
+    /// hit of the ray from `origin[k]` along `dir[k]` within `(t_min, t_max[k])`, and its
+    /// `t` in the lanes that hit, bit for bit as [`Shapes::intersect`] answers it (its
+    /// roots, then its trusted box).
     #[inline]
     pub fn hit_lanes8(
         &self,
         indices: [usize; 8],
-        (origin, dir): (Vec3x8, Vec3x8),
+        rays: (Vec3x8, Vec3x8),
         t_min: f32,
         t_max: F32x8,
         options: IntersectOptions,
-    ) -> Mask8 {
+    ) -> (Mask8, F32x8) {
         let records = indices.map(|i| &self.records[i]);
         let centre = Vec3x8::from_lanes(records.map(|r| r.centre));
         let radius = F32x8::from_array(records.map(|r| r.radius));
-        let lanes_min = F32x8::splat(t_min);
-        let (hit, t) = match options.sphere_roots {
-            SphereRoots::Precise => {
-                sphere_lanes::<_, false>(origin, dir, centre, radius, lanes_min, t_max)
-            }
-            SphereRoots::Textbook => {
-                sphere_lanes::<_, true>(origin, dir, centre, radius, lanes_min, t_max)
-            }
-        };
-        if hit.none() {
-            return hit;
-        }
-        let (trusted, some) = trusted_sphere_boxes8(centre, radius, options);
-        hit & some & holds_lanes8(origin, dir.recip(), &trusted, t_min, t)
+        spheres_lanes8((centre, radius), rays, t_min, t_max, options)
     }
+
+    /// The box the structures hold sphere `index` in (`accel::bounds::prim_bounds`), if
+    /// it is finite: its hits count only inside it.
+    #[inline]
+    pub fn trusted_box(&self, index: usize, options: IntersectOptions) -> Option<Aabb> {
+        let Sphere { centre, radius, .. } = self.records[index];
+        trusted_sphere_box(centre, radius, options)
+    }
+
+    /// [`Spheres::hit_lanes8`] with sphere `index` in every lane.
+    #[inline(always)]
+    pub fn hit_one8(
+        &self,
+        index: usize,
+        rays: (Vec3x8, Vec3x8),
+        t_min: f32,
+        t_max: F32x8,
+        options: IntersectOptions,
+    ) -> (Mask8, F32x8) {
+        let Sphere { centre, radius, .. } = self.records[index];
+        let sphere = (Vec3x8::splat(centre), F32x8::splat(radius));
+        spheres_lanes8(sphere, rays, t_min, t_max, options)
+    }
+}
+
+/// The body of [`Spheres::hit_lanes8`]: sphere `k` (its centre and radius) against ray `k`.
+#[inline(always)]
+fn spheres_lanes8(
+    (centre, radius): (Vec3x8, F32x8),
+    (origin, dir): (Vec3x8, Vec3x8),
+    t_min: f32,
+    t_max: F32x8,
+    options: IntersectOptions,
+) -> (Mask8, F32x8) {
+    let lanes_min = F32x8::splat(t_min);
+    let (hit, t) = match options.sphere_roots {
+        SphereRoots::Precise => {
+            sphere_lanes::<_, false>(origin, dir, centre, radius, lanes_min, t_max)
+        }
+        SphereRoots::Textbook => {
+            sphere_lanes::<_, true>(origin, dir, centre, radius, lanes_min, t_max)
+        }
+    };
+    if hit.none() {
+        return (hit, t);
+    }
+    let (trusted, some) = trusted_sphere_boxes8(centre, radius, options);
+    (
+        hit & some & holds_lanes8(origin, dir.recip(), &trusted, t_min, t),
+        t,
+    )
 }
 
 impl LeafPack for Spheres {

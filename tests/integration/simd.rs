@@ -512,7 +512,8 @@ proptest! {
     }
 
     /// The hit rule's box test, one ray against eight boxes, eight rays against one and
-    /// eight rays against eight boxes, lane by lane `BoxRay::holds`.
+    /// eight rays against eight boxes, lane by lane `BoxRay::holds`; and the last's
+    /// intervals, `BoxRay::interval`.
     #[test]
     fn box_holds_equal_scalar(
         p in packet(),
@@ -541,15 +542,26 @@ proptest! {
         let lanes = intersect::holds_lanes8(
             origin, inv_dir, &BoxPack8::new(&eight_boxes), p.t_min[0], eight,
         ).bitmask();
+        let pack = BoxPack8::new(&eight_boxes);
+        let intervals = intersect::intervals_lanes8(origin, inv_dir, &pack, p.t_min[0]);
         for (k, &(lo, hi)) in eight_boxes.iter().enumerate() {
             let lane = BoxRay::new(p.rays[k].origin, p.rays[k].dir.recip());
             let scalar = lane.holds(lo, hi, p.t_min[0], hits[k]);
             prop_assert_eq!(lanes >> k & 1 == 1, scalar, "ray and box {}", k);
+            // The interval itself, where it is not empty.
+            let interval = lane.interval(lo, hi, p.t_min[0], f32::INFINITY);
+            let hit = intervals.hit.bitmask() >> k & 1 == 1;
+            prop_assert_eq!(hit, interval.is_some(), "interval of ray and box {}", k);
+            if let Some((entry, exit)) = interval {
+                let bits = (intervals.entry.lane(k).to_bits(), intervals.exit.lane(k).to_bits());
+                prop_assert_eq!(bits, (entry.to_bits(), exit.to_bits()), "ray and box {}", k);
+            }
         }
     }
 
-    /// `Spheres::hit_lanes8` (eight rays against eight spheres, lane by lane) against
-    /// `Shapes::intersect`: both root forms, with and without the margin.
+    /// `Spheres::hit_lanes8` (eight rays against eight spheres, lane by lane) and
+    /// `Spheres::hit_one8` (against one) against `Shapes::intersect`: both root forms,
+    /// with and without the margin.
     #[test]
     fn sphere_hit_lanes8_equal_scalar(
         rays in prop::array::uniform8(ray()),
@@ -567,13 +579,19 @@ proptest! {
         let options = IntersectOptions { sphere_roots: roots, sphere_margin };
         let indices = order.map(|i| i % spheres.len());
         let lanes = (Vec3x8::from_fn(|k| rays[k].origin), Vec3x8::from_fn(|k| rays[k].dir));
-        let hit = storage
-            .hit_lanes8(indices, lanes, t_min, F32x8::from_fn(|k| t_max[k]), options)
-            .bitmask();
+        let (hit, t) =
+            storage.hit_lanes8(indices, lanes, t_min, F32x8::from_fn(|k| t_max[k]), options);
+        // And sphere `indices[0]` against every lane.
+        let (one_hit, one_t) =
+            storage.hit_one8(indices[0], lanes, t_min, F32x8::from_fn(|k| t_max[k]), options);
         for k in 0..8 {
             let query = RayQuery::new(&rays[k], t_min, options);
-            let scalar = storage.intersect(indices[k], &query, t_max[k]).is_some();
-            prop_assert_eq!(hit >> k & 1 == 1, scalar, "lane {}: {:?}", k, rays[k]);
+            let scalar = storage.intersect(indices[k], &query, t_max[k]).map(|h| h.t.to_bits());
+            let lane = (hit.bitmask() >> k & 1 == 1).then(|| t.lane(k).to_bits());
+            prop_assert_eq!(lane, scalar, "lane {}: {:?}", k, rays[k]);
+            let scalar = storage.intersect(indices[0], &query, t_max[k]).map(|h| h.t.to_bits());
+            let lane = (one_hit.bitmask() >> k & 1 == 1).then(|| one_t.lane(k).to_bits());
+            prop_assert_eq!(lane, scalar, "one sphere, lane {}: {:?}", k, rays[k]);
         }
     }
 
