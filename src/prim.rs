@@ -191,7 +191,7 @@ impl PrimId {
     /// The largest number of primitives of one kind.
     pub const MAX_INDEX: u32 = (1 << Self::INDEX_BITS) - 1;
 
-    pub fn new(kind: PrimKind, index: u32) -> Self {
+    pub const fn new(kind: PrimKind, index: u32) -> Self {
         debug_assert!(index <= Self::MAX_INDEX);
         PrimId(((kind as u32) << Self::INDEX_BITS) | index)
     }

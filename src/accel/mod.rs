@@ -23,6 +23,7 @@ pub mod bvh8;
 pub mod count;
 pub mod grid;
 mod hit;
+pub mod interior;
 mod none;
 mod stack;
 pub mod stream;
@@ -30,12 +31,15 @@ mod structure;
 
 use std::time::{Duration, Instant};
 
-use crate::intersect::{IntersectOptions, PacketQuery, RayQuery, SphereRoots};
+use crate::intersect::{
+    beyond_lanes, holds_lanes8, intervals_lanes8, BoxPack8, IntersectOptions, PacketQuery,
+    RayQuery, SphereRoots,
+};
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{traceable_lanes, Hit, Ray, RayPacket};
 pub use crate::scene::AccelKind;
 use crate::scene::Geometry;
-use crate::simd::{Bits, F32x8, F32xP, LaneBits, Mask8, Vec3x8, PACKET};
+use crate::simd::{for_lanes, Bits, F32x8, F32xP, LaneBits, Mask8, Vec3x8, PACKET};
 use bvh2::Bvh2;
 pub use bvh2::BvhBuild;
 use bvh8::Bvh8;
@@ -246,10 +250,48 @@ impl Structure for Accel {
     }
 }
 
+/// What [`Tracer::closest_in_sphere8`] answers of eight rays.
+#[derive(Clone, Copy, Debug)]
+pub struct SphereAnswers {
+    /// The lanes answered.
+    pub answered: u8,
+    /// In those lanes, the closest hit's `t` and sphere, and how many spheres were tested.
+    t: F32x8,
+    sphere: [u32; 8],
+    tested: [u32; 8],
+}
+
+impl SphereAnswers {
+    /// No lane answered.
+    pub const NONE: SphereAnswers = SphereAnswers {
+        answered: 0,
+        t: F32x8::ZERO,
+        sphere: [0; 8],
+        tested: [0; 8],
+    };
+
+    /// Lane `k`'s hit, and the spheres tested to find it (an answered lane).
+    #[inline]
+    pub fn hit(&self, k: usize) -> (Hit, u32) {
+        let hit = Hit {
+            t: self.t.lane(k),
+            prim: PrimId::new(PrimKind::Sphere, self.sphere[k]),
+            u: 0.0,
+            v: 0.0,
+        };
+        (hit, self.tested[k])
+    }
+}
+
 /// Answers ray queries for one scene: the accelerator for bounded primitives, planes apart.
 pub struct Tracer<'s> {
     pub geometry: &'s Geometry,
     accel: Accel,
+    /// The spheres' rooms: the rays from inside a sphere that it and the spheres near it
+    /// answer ([`interior`]); none unless asked for ([`Tracer::with_rooms`]).
+    rooms: Option<interior::Rooms>,
+    /// The shutter interval the structure bounds moving spheres over.
+    shutter: [f32; 2],
     /// What the profile chose in the primitives' tests: every query carries it.
     options: IntersectOptions,
     build_time: Duration,
@@ -278,9 +320,21 @@ impl<'s> Tracer<'s> {
         Tracer {
             geometry,
             accel,
+            rooms: None,
+            shutter: options.shutter,
             options: intersect,
             build_time: start.elapsed(),
         }
+    }
+
+    /// The tracer, with the rooms of the spheres whose material `glass` says rays travel
+    /// in: [`Tracer::closest_in_sphere8`] answers the rays made inside them ([`interior`]).
+    /// Making the rooms counts in the build time.
+    pub fn with_rooms(mut self, glass: impl Fn(u32) -> bool) -> Self {
+        let start = Instant::now();
+        self.rooms = interior::Rooms::new(self.geometry, self.shutter, self.options, glass);
+        self.build_time += start.elapsed();
+        self
     }
 
     /// The structure's short name ([`Accel::name`]).
@@ -356,6 +410,78 @@ impl<'s> Tracer<'s> {
         let spheres = &self.geometry.spheres;
         let (hit, _) = spheres.hit_lanes8(indices, (origin, dir), t_min, t_max, self.options);
         traceable_lanes(origin, dir) & hit
+    }
+
+    /// The closest hits of eight rays from inside the trusted box of sphere `sphere`, found
+    /// by that sphere and the spheres near it where they answer as every structure would
+    /// ([`interior`]): of the lanes `lanes`, those answered, and each one's hit. The other
+    /// lanes need a walk.
+    pub fn closest_in_sphere8(
+        &self,
+        sphere: usize,
+        (origin, dir): (Vec3x8, Vec3x8),
+        lanes: u8,
+    ) -> SphereAnswers {
+        let Some(rooms) = &self.rooms else {
+            return SphereAnswers::NONE;
+        };
+        let Some((near_spheres, near_boxes)) = rooms.near_spheres(sphere) else {
+            return SphereAnswers::NONE;
+        };
+        let room = rooms.bounds(self.geometry, sphere);
+        let (min, max) = (Vec3x8::splat(room.min), Vec3x8::splat(room.max));
+        let inside = origin.x.ge(min.x)
+            & origin.y.ge(min.y)
+            & origin.z.ge(min.z)
+            & origin.x.le(max.x)
+            & origin.y.le(max.y)
+            & origin.z.le(max.z);
+        let asked = (inside & traceable_lanes(origin, dir)).bitmask() & lanes;
+        if asked == 0 {
+            return SphereAnswers::NONE;
+        }
+        let infinity = F32x8::splat(f32::INFINITY);
+        let test = |i: u32| {
+            let spheres = &self.geometry.spheres;
+            spheres.hit_one8(i as usize, (origin, dir), 0.0, infinity, self.options)
+        };
+        let (mut found, mut best) = test(sphere as u32);
+        let mut best_sphere = [sphere as u32; 8];
+        let mut tested = [1; 8];
+        let inv_dir = dir.recip();
+        for (&near, near_box) in near_spheres.iter().zip(near_boxes) {
+            // The lanes where the near sphere's box may hold a hit at or before the best
+            // (any hit, where none was found): no routine reports one in the others.
+            let near_box = BoxPack8 {
+                min: Vec3x8::splat(near_box.min),
+                max: Vec3x8::splat(near_box.max),
+            };
+            let interval = intervals_lanes8(origin, inv_dir, &near_box, 0.0);
+            let limit = found.select(best, infinity);
+            let reach = interval.hit.and_not(beyond_lanes(interval.entry, limit));
+            if reach.bitmask() & asked == 0 {
+                continue;
+            }
+            for_lanes(reach.bitmask(), |k| tested[k] += 1);
+            let (hit, t) = test(near);
+            let hit = hit & reach;
+            // The tie rule of `ClosestHit`: the smaller `t`, at equal `t` the smaller id.
+            let mut wins = (hit & (!found | t.lt(best))).bitmask();
+            for_lanes((hit & found & t.eq(best)).bitmask(), |k| {
+                wins |= u8::from(near < best_sphere[k]) << k;
+            });
+            best = Mask8::from_bitmask(wins).select(t, best);
+            for_lanes(wins, |k| best_sphere[k] = near);
+            found = found | hit;
+        }
+        // A near sphere's hit beyond the sphere's box may have a closer one outside it.
+        let held = holds_lanes8(origin, inv_dir, &BoxPack8 { min, max }, 0.0, best);
+        SphereAnswers {
+            answered: (found & held).bitmask() & asked,
+            t: best,
+            sphere: best_sphere,
+            tested,
+        }
     }
 
     /// [`Tracer::occluded`], its work counted into `count`.

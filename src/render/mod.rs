@@ -245,7 +245,16 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
             (Some(dir), true) => Some(Skybox::load(dir)),
             _ => None,
         },
-        || Tracer::new(&scene.geometry, &accel_options),
+        || {
+            let tracer = Tracer::new(&scene.geometry, &accel_options);
+            match options.mode {
+                // Only the stream renderer asks the spheres (`accel::interior`).
+                RenderMode::Stream => {
+                    tracer.with_rooms(|m| scene.materials[m as usize].transmittance > 0.0)
+                }
+                RenderMode::Scalar => tracer,
+            }
+        },
     );
     let skybox = match skybox {
         Some(Ok(sky)) => {

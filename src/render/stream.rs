@@ -10,12 +10,17 @@
 //! [`crate::accel::Tracer::occluded_by_spheres8`]), whose Blinn-Phong sums are
 //! taken ([`super::shade::Phong8`]) and whose reflected and transmitted rays are made
 //! ([`Bounce8`]) eight lanes at a time, light by light in the scalar order, bit for bit
-//! as the scalar path. A depth queues its reflected rays, then its transmitted ones. Once
+//! as the scalar path. A depth queues its reflected rays, then its transmitted ones; those
+//! made inside a sphere (refracted into it, reflected within it) that the sphere and the
+//! spheres near it answer as they are made ([`crate::accel::Tracer::closest_in_sphere8`])
+//! go between the two, with their hits, and are not walked. Once
 //! the deepest queue is shaded, colours flow back up: each ray's colour, clamped if it
 //! hit something, is added to its parent's with its weight, in the order the scalar
 //! [`Shader::trace`] adds them, so the image is the scalar one byte for byte. Where the
 //! render counts (`C` of [`crate::accel::count`]), each ray's work flows up with its
 //! colour, so that a pixel's cost is what its samples' rays took.
+
+use std::ops::Range;
 
 use bumpalo::collections::Vec as ArenaVec;
 use bumpalo::Bump;
@@ -26,6 +31,7 @@ use super::sampler::Sample;
 use super::shade::{Bounce8, Optics8, Phong8, Profile, RayCounts, RayKind, Shader, Work, EPS};
 use crate::accel::count::{Count, CountLanes};
 use crate::accel::stream::{self, Answers};
+use crate::accel::SphereAnswers;
 use crate::intersect::spawn_origin8;
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{Hit, Ray};
@@ -40,6 +46,11 @@ pub(super) struct Queue<'a, C> {
     seen: ArenaVec<'a, Seen>,
     /// Below depth 1, the rays before this index are reflected, the others transmitted.
     reflected: usize,
+    /// The rays in this range start inside spheres, which gave their hits as the rays
+    /// were made ([`crate::accel::Tracer::closest_in_sphere8`]): those hits, in `known`,
+    /// each with the spheres tested. The rays before and after the range are walked.
+    answered: Range<usize>,
+    known: ArenaVec<'a, (Hit, u32)>,
     /// Where the render counts, each ray's work by kind: its own, its shadow rays' and
     /// its children's, added as they are traced; empty otherwise.
     work: ArenaVec<'a, Work<C>>,
@@ -76,23 +87,25 @@ impl<'a, C: Count> Queue<'a, C> {
             lineage: ArenaVec::with_capacity_in(capacity, arena),
             seen: ArenaVec::with_capacity_in(capacity, arena),
             reflected: 0,
+            answered: 0..0,
+            known: ArenaVec::with_capacity_in(capacity, arena),
             work: ArenaVec::with_capacity_in(if C::ON { capacity } else { 0 }, arena),
         }
     }
 
     /// Queues a primary sample of the tile's pixel `pixel`.
     pub(super) fn push_primary(&mut self, ray: Ray, sample: Sample, pixel: u32) {
-        self.push(ray, sample, 1.0, pixel, Vec3::ONE);
-    }
-
-    fn push(&mut self, ray: Ray, sample: Sample, ior: f32, parent: u32, weight: Vec3) {
-        push_reserved(&mut self.rays, ray);
         let lineage = Lineage {
             sample,
-            ior,
-            parent,
-            weight,
+            ior: 1.0,
+            parent: pixel,
+            weight: Vec3::ONE,
         };
+        self.push(ray, lineage);
+    }
+
+    fn push(&mut self, ray: Ray, lineage: Lineage) {
+        push_reserved(&mut self.rays, ray);
         push_reserved(&mut self.lineage, lineage);
     }
 
@@ -100,10 +113,17 @@ impl<'a, C: Count> Queue<'a, C> {
         self.rays.len()
     }
 
+    /// Queues a ray whose hit is known: `answer`, the hit and the spheres tested to find it.
+    fn push_answered(&mut self, ray: Ray, lineage: Lineage, answer: (Hit, u32)) {
+        self.push(ray, lineage);
+        push_reserved(&mut self.known, answer);
+    }
+
     /// Queues the rays of `other` (not yet traced) after its own.
     fn append(&mut self, other: &Queue<C>) {
         self.rays.extend_from_slice(&other.rays);
         self.lineage.extend_from_slice(&other.lineage);
+        self.known.extend_from_slice(&other.known);
     }
 
     /// Ray `i`'s colour as its parent takes it.
@@ -185,16 +205,33 @@ fn shade_depth<'a, C: Count>(
     let n = queue.len();
     let mut hits = ArenaVec::with_capacity_in(n, arena);
     let (work, reflected) = (&mut queue.work, queue.reflected);
-    stream::closest_rays_counting::<C>(shader.tracer, &queue.rays, |found, lanes| {
-        if C::ON {
-            for k in 0..found.len() {
-                let mut own = Work::default();
-                own.add(ray_kind(depth, hits.len() + k, reflected), &lanes.lane(k));
-                work.push(own);
+    let walk = |rays: &[Ray], hits: &mut ArenaVec<Option<Hit>>, work: &mut ArenaVec<_>| {
+        stream::closest_rays_counting::<C>(shader.tracer, rays, |found, lanes| {
+            if C::ON {
+                for k in 0..found.len() {
+                    let mut own = Work::default();
+                    own.add(ray_kind(depth, hits.len() + k, reflected), &lanes.lane(k));
+                    work.push(own);
+                }
             }
+            hits.extend_from_slice(found);
+        });
+    };
+    let answered = queue.answered.clone();
+    walk(&queue.rays[..answered.start], &mut hits, work);
+    for &(hit, tested) in &queue.known {
+        if C::ON {
+            // The ray, and the spheres it was tested against.
+            let mut count = C::default();
+            count.ray();
+            count.prims(tested);
+            let mut own = Work::default();
+            own.add(ray_kind(depth, hits.len(), reflected), &count);
+            work.push(own);
         }
-        hits.extend_from_slice(found);
-    });
+        hits.push(Some(hit));
+    }
+    walk(&queue.rays[answered.end..], &mut hits, work);
     let mut blocks = HitBlocks::with_capacity_in(n, arena);
     for (i, (hit, ray)) in hits.iter().zip(&queue.rays).enumerate() {
         match hit {
@@ -244,6 +281,10 @@ fn shade_depth<'a, C: Count>(
     let mut next = Queue::with_capacity_in(2 * n, arena);
     if depth < shader.options.max_depth {
         let mut transmitted = Queue::with_capacity_in(n, arena);
+        // The rays that start inside spheres and that the spheres answer, reflected and
+        // transmitted: queued between the other reflected rays and transmitted ones, so
+        // that each parent's reflected ray still comes before its transmitted one.
+        let mut inner = [(); 2].map(|_| Queue::with_capacity_in(n, arena));
         for block in &blocks {
             let optics = Optics8::new(block.material.map(|m| &shader.scene.materials[m as usize]));
             if optics.spawns_none() {
@@ -253,7 +294,19 @@ fn shade_depth<'a, C: Count>(
             let inside = Mask8::from_bitmask(block.inside);
             let schlick = shader.options.schlick;
             let bounce = Bounce8::new(block.dir, block.nf, inside, ior_here, &optics, schlick);
-            for_lanes(bounce.reflected.bitmask() & block.lanes, |k| {
+            let reflected = bounce.reflected.bitmask() & block.lanes;
+            let through = bounce.transmitted.bitmask() & block.lanes;
+            // Where transmitted rays start (any point where none is).
+            let inward = if through != 0 {
+                block.offset(-block.nf)
+            } else {
+                block.origin
+            };
+            let answers = block.inner_answers(shader, &bounce, inward, (reflected, through));
+            // A lane's ray inside its sphere is its reflected one if it arrived from inside.
+            let inner_reflected = answers.answered & block.inside;
+            let inner_through = answers.answered & !block.inside;
+            let reflected_ray = |k: usize| {
                 let i = block.ray[k] as usize;
                 let Lineage { sample, ior, .. } = queue.lineage[i];
                 let sample = sample.spawn(0);
@@ -263,27 +316,62 @@ fn shade_depth<'a, C: Count>(
                     time: block.time.lane(k),
                 };
                 let weight = bounce.reflected_weight.lane(k);
-                next.push(ray, sample, ior, i as u32, weight);
+                (
+                    ray,
+                    Lineage {
+                        sample,
+                        ior,
+                        parent: i as u32,
+                        weight,
+                    },
+                )
+            };
+            for_lanes(reflected & !inner_reflected, |k| {
+                let (ray, lineage) = reflected_ray(k);
+                next.push(ray, lineage);
             });
-            let through = bounce.transmitted.bitmask() & block.lanes;
-            if through != 0 {
-                let origin = block.offset(-block.nf);
-                for_lanes(through, |k| {
-                    let i = block.ray[k] as usize;
-                    let ray = Ray {
-                        origin: origin.lane(k),
-                        dir: bounce.refracted.lane(k),
-                        time: block.time.lane(k),
-                    };
-                    let (weight, ior) =
-                        (bounce.transmitted_weight.lane(k), bounce.ior_next.lane(k));
-                    transmitted.push(ray, queue.lineage[i].sample.spawn(1), ior, i as u32, weight);
-                });
-            }
+            for_lanes(inner_reflected, |k| {
+                let (ray, lineage) = reflected_ray(k);
+                inner[0].push_answered(ray, lineage, answers.hit(k));
+            });
+            let transmitted_ray = |k: usize| {
+                let i = block.ray[k] as usize;
+                let ray = Ray {
+                    origin: inward.lane(k),
+                    dir: bounce.refracted.lane(k),
+                    time: block.time.lane(k),
+                };
+                let lineage = Lineage {
+                    sample: queue.lineage[i].sample.spawn(1),
+                    ior: bounce.ior_next.lane(k),
+                    parent: i as u32,
+                    weight: bounce.transmitted_weight.lane(k),
+                };
+                (ray, lineage)
+            };
+            for_lanes(inner_through, |k| {
+                let (ray, lineage) = transmitted_ray(k);
+                inner[1].push_answered(ray, lineage, answers.hit(k));
+            });
+            for_lanes(through & !inner_through, |k| {
+                let (ray, lineage) = transmitted_ray(k);
+                transmitted.push(ray, lineage);
+            });
         }
-        rays.add(RayKind::Reflection, next.len() as u64);
-        rays.add(RayKind::Refraction, transmitted.len() as u64);
+        let [inner_reflected, inner_transmitted] = &inner;
+        rays.add(
+            RayKind::Reflection,
+            (next.len() + inner_reflected.len()) as u64,
+        );
+        rays.add(
+            RayKind::Refraction,
+            (inner_transmitted.len() + transmitted.len()) as u64,
+        );
+        let first = next.len();
+        next.append(inner_reflected);
         next.reflected = next.len();
+        next.append(inner_transmitted);
+        next.answered = first..next.len();
         next.append(&transmitted);
     }
     next
@@ -306,10 +394,11 @@ struct HitBlock {
     lanes: u8,
     /// The lanes whose ray arrived from inside the surface.
     inside: u8,
-    /// The lanes whose ray arrived from inside a sphere, where every lane hit one
-    /// (their shadow rays meet it again: [`crate::accel::Tracer::occluded_by_spheres8`]),
-    /// and each lane's primitive.
-    enclosed: u8,
+    /// Whether every lane hit a sphere (the shadow rays of those that arrived from inside
+    /// meet it again: [`crate::accel::Tracer::occluded_by_spheres8`]; the rays they
+    /// spawn inside it may meet it alone: [`HitBlock::inner_answers`]), and each lane's
+    /// primitive.
+    spheres: bool,
     prim: [PrimId; 8],
     /// Whether the points have error bounds (all but with the `course` profile).
     bounded: bool,
@@ -351,11 +440,7 @@ impl HitBlock {
         let mut block = HitBlock {
             lanes: ((1u16 << count) - 1) as u8,
             inside: inside.bitmask(),
-            enclosed: if kind == Some(PrimKind::Sphere) {
-                inside.bitmask()
-            } else {
-                0
-            },
+            spheres: kind == Some(PrimKind::Sphere),
             prim: prims,
             bounded: shader.options.profile == Profile::Standard,
             ray: *ray,
@@ -369,6 +454,38 @@ impl HitBlock {
         };
         block.origin = block.offset(nf);
         block
+    }
+
+    /// The closest hits of the rays this block spawns inside its spheres, where the spheres
+    /// answer them ([`crate::accel::Tracer::closest_in_sphere8`]): of the lanes that
+    /// reflect (`reflected`) those that arrived from inside, and of those that transmit
+    /// (`through`, starting at `inward`) those that arrived from outside. Fuzzy reflections
+    /// are left to the walks.
+    fn inner_answers(
+        &self,
+        shader: &Shader,
+        bounce: &Bounce8,
+        inward: Vec3x8,
+        (reflected, through): (u8, u8),
+    ) -> SphereAnswers {
+        let mirrors = if shader.options.roughness == 0.0 {
+            reflected & self.inside
+        } else {
+            0
+        };
+        let lanes = mirrors | (through & !self.inside);
+        if !self.spheres || lanes == 0 {
+            return SphereAnswers::NONE;
+        }
+        // The lanes in the sphere of the first: eight lanes of one sphere are the rule.
+        let sphere = self.prim[lanes.trailing_zeros() as usize];
+        let lanes = lanes & bits8(|k| self.prim[k] == sphere);
+        let inside = Mask8::from_bitmask(self.inside);
+        let origin = inside.select_vec(self.origin, inward);
+        let dir = inside.select_vec(bounce.mirror, bounce.refracted);
+        shader
+            .tracer
+            .closest_in_sphere8(sphere.index(), (origin, dir), lanes)
     }
 
     /// The points offset towards `side` (a unit vector per lane), as `Surface::origin`
@@ -505,7 +622,11 @@ impl<'a> ShadowQueue<'a> {
                 // A ray that leaves a sphere from inside is answered by that sphere's
                 // test, as the walk would answer it, without the walk.
                 let mut walked = facing;
-                let enclosed = facing & block.enclosed;
+                let enclosed = if block.spheres {
+                    facing & block.inside
+                } else {
+                    0
+                };
                 if enclosed != 0 {
                     let own = shader.tracer.occluded_by_spheres8(
                         block.prim.map(|p| p.index()),
@@ -558,4 +679,9 @@ impl<'a> ShadowQueue<'a> {
 /// its light reaches.
 fn unlit(lit: &mut [u8], tag: u32) {
     lit[tag as usize >> 3] &= !(1 << (tag & 7));
+}
+
+/// The bits `k` of eight lanes where `f(k)` holds.
+fn bits8(f: impl Fn(usize) -> bool) -> u8 {
+    (0..8).fold(0, |mask, k| mask | u8::from(f(k)) << k)
 }

@@ -167,6 +167,43 @@ fn scene_of(giants: bool) -> impl Strategy<Value = Scene> {
         })
 }
 
+/// A scene of rows of spheres along the x axis, each sphere `gap` from the last (a gap
+/// below zero overlaps, one near 1e-4 of the sphere's box is about the rooms' margin),
+/// with up to four other primitives, and the indices of the row's spheres.
+fn sphere_rows() -> impl Strategy<Value = (Scene, Vec<usize>)> {
+    let gap = prop_oneof![
+        Just(0.0f32),
+        Just(-0.05),
+        Just(1e-7),
+        Just(1e-5),
+        Just(2e-4),
+        Just(1e-3),
+        0.0f32..0.5,
+    ];
+    (
+        point(),
+        prop::collection::vec((0.05f32..1.5, gap), 1..6),
+        prop::collection::vec(primitive(), 0..4),
+    )
+        .prop_map(|(start, row, others)| {
+            let mut text = String::from("f 1 1 1 1 1 1 1 0 10 0 1\n");
+            let mut x = start[0];
+            for (i, &(radius, gap)) in row.iter().enumerate() {
+                if i > 0 {
+                    x += gap + radius;
+                }
+                text += &format!("s {x} {} {} {radius}\n", start[1], start[2]);
+                x += radius;
+            }
+            for p in &others {
+                text += p;
+                text += "\n";
+            }
+            let scene = parse_text(&text).expect("the generated scene parses");
+            (scene, (0..row.len()).collect())
+        })
+}
+
 fn direction() -> impl Strategy<Value = Vec3> {
     prop_oneof![
         // Axis-aligned and diagonal directions put rays in slab planes (0 * inf).
@@ -242,6 +279,38 @@ fn far_ray() -> impl Strategy<Value = (Ray, f32)> {
             let origin = Vec3::from_array(target) - distance * dir;
             (Ray::new(origin, dir), distance * beyond)
         })
+}
+
+/// A ray from a corner of a sphere's box that misses the sphere and meets the sphere
+/// beside it behind a triangle, out of the box: the two spheres must not answer it, as
+/// the near sphere's hit lies beyond the box (a primitive out there may come first).
+#[test]
+fn a_near_spheres_hit_beyond_the_box_is_left_to_the_walk() {
+    let text = "f 1 1 1 1 1 1 1 0 10 0 1\ns 0 0 0 1\ns 2 0 0 1\n\
+                p 3\n1.2 -3 -3\n1.2 3 -3\n1.2 0 3\n";
+    let scene = parse_text(text).expect("the scene parses");
+    let brute = Tracer::new(&scene.geometry, &AccelOptions::brute_force()).with_rooms(|_| true);
+    let origin = Vec3::splat(0.9);
+    let ray = Ray::new(origin, (Vec3::new(2.0, 0.5, 0.5) - origin).normalize());
+    let hit = brute
+        .closest(&ray, 0.0, f32::INFINITY)
+        .expect("the triangle");
+    assert_eq!(hit.prim.kind(), PrimKind::Triangle);
+    let answers =
+        brute.closest_in_sphere8(0, (Vec3x8::splat(ray.origin), Vec3x8::splat(ray.dir)), 1);
+    assert_eq!(answers.answered, 0);
+    // From the centre, the sphere answers: its own far side.
+    let centre = Ray::new(Vec3::ZERO, ray.dir);
+    let answers = brute.closest_in_sphere8(
+        0,
+        (Vec3x8::splat(centre.origin), Vec3x8::splat(centre.dir)),
+        1,
+    );
+    assert_eq!(answers.answered, 1);
+    assert_eq!(
+        Some(answers.hit(0).0),
+        brute.closest(&centre, 0.0, f32::INFINITY)
+    );
 }
 
 proptest! {
@@ -322,6 +391,41 @@ proptest! {
                     "{} lane {}: {:?}", tracer.name(), k, rays[k]
                 );
             }
+        }
+    }
+
+    /// The renderer answers a ray that starts inside a sphere's box by that sphere and
+    /// the spheres near it (`Tracer::closest_in_sphere8`): each lane it answers has brute
+    /// force's closest hit, on rows of spheres that touch, overlap or keep about the
+    /// rooms' margin apart, among other primitives.
+    #[test]
+    fn a_sphere_and_its_near_spheres_answer_rays_inside_as_brute_force(
+        (scene, rows) in sphere_rows(),
+        dirs in prop::array::uniform8(direction()),
+        row in any::<prop::sample::Index>(),
+        depth in prop::array::uniform8(prop_oneof![Just(0.0f32), 0.0f32..1.0, 1.0f32..1.75]),
+        towards in prop::array::uniform8(direction()),
+        textbook in prop::bool::ANY,
+    ) {
+        let g = &scene.geometry;
+        let sphere = rows[row.index(rows.len())];
+        let sphere_rec = g.spheres.records[sphere];
+        // Inside the sphere, on it, or out in its box's corners.
+        let rays: [Ray; 8] = std::array::from_fn(|k| {
+            let origin = sphere_rec.centre + depth[k] * sphere_rec.radius * towards[k];
+            Ray::new(origin, dirs[k])
+        });
+        let roots = if textbook { SphereRoots::Textbook } else { SphereRoots::Precise };
+        let options = AccelOptions {
+            intersect: IntersectOptions { sphere_roots: roots, ..Default::default() },
+            ..AccelOptions::brute_force()
+        };
+        let brute = Tracer::new(g, &options).with_rooms(|_| true);
+        let lanes = (Vec3x8::from_fn(|k| rays[k].origin), Vec3x8::from_fn(|k| rays[k].dir));
+        let answers = brute.closest_in_sphere8(sphere, lanes, 0xff);
+        for (k, ray) in rays.iter().enumerate().filter(|(k, _)| answers.answered >> k & 1 == 1) {
+            let expected = brute.closest(ray, 0.0, f32::INFINITY);
+            prop_assert_eq!(Some(answers.hit(k).0), expected, "lane {}: {:?}", k, ray);
         }
     }
 
