@@ -1,7 +1,8 @@
-//! Rays that start inside a sphere's box (refracted into a glass sphere, or reflected
+//! Rays that start inside a glass sphere's box (refracted into the sphere, or reflected
 //! inside it): where no primitive but a few spheres comes near that box, the sphere and
-//! those spheres alone give the ray's closest hit, so the renderer answers such rays
-//! without a walk ([`super::Tracer::closest_in_sphere8`]).
+//! those spheres alone give the ray's closest hit, so the stream renderer answers such
+//! rays without a walk ([`super::Tracer::closest_in_sphere8`]; the rooms are made for it
+//! alone, [`super::Tracer::with_rooms`]).
 //!
 //! **Why it is exact.** Every primitive reports a hit at `t` only inside the ray's
 //! interval of its trusted box, as the structures' box test computes it
@@ -50,7 +51,8 @@ pub struct Rooms {
 
 /// A sphere with no primitive near it.
 const ALONE: u32 = 0;
-/// A sphere with a primitive other than a sphere near it, or too many spheres.
+/// A sphere whose rays are left to the walks: a primitive other than a sphere comes near
+/// it, or too many spheres, or it is not glass, or its box vanishes.
 const CROWDED: u32 = u32::MAX;
 
 /// The spheres near one sphere, and their boxes: the first `count`.
