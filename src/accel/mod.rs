@@ -441,14 +441,15 @@ impl<'s> Tracer<'s> {
             return SphereAnswers::NONE;
         }
         let infinity = F32x8::splat(f32::INFINITY);
+        let inv_dir = dir.recip();
         let test = |i: u32| {
+            let rays = ((origin, dir), inv_dir);
             let spheres = &self.geometry.spheres;
-            spheres.hit_one8(i as usize, (origin, dir), 0.0, infinity, self.options)
+            spheres.hit_one8(i as usize, rays, 0.0, infinity, self.options)
         };
         let (mut found, mut best) = test(sphere as u32);
         let mut best_sphere = [sphere as u32; 8];
         let mut tested = [1; 8];
-        let inv_dir = dir.recip();
         for (&near, near_box) in near_spheres.iter().zip(near_boxes) {
             // The lanes where the near sphere's box may hold a hit at or before the best
             // (any hit, where none was found): no routine reports one in the others.

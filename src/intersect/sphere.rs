@@ -235,7 +235,8 @@ impl Spheres {
         let records = indices.map(|i| &self.records[i]);
         let centre = Vec3x8::from_lanes(records.map(|r| r.centre));
         let radius = F32x8::from_array(records.map(|r| r.radius));
-        spheres_lanes8((centre, radius), rays, t_min, t_max, options)
+        let inv_dir = || rays.1.recip();
+        spheres_lanes8((centre, radius), rays, inv_dir, (t_min, t_max), options)
     }
 
     /// The box the structures hold sphere `index` in (`accel::bounds::prim_bounds`), if
@@ -246,29 +247,31 @@ impl Spheres {
         trusted_sphere_box(centre, radius, options)
     }
 
-    /// [`Spheres::hit_lanes8`] with sphere `index` in every lane.
+    /// [`Spheres::hit_lanes8`] with sphere `index` in every lane, for rays whose
+    /// `inv_dir = 1 / dir` the caller has (the trusted box's test takes it).
     #[inline(always)]
     pub fn hit_one8(
         &self,
         index: usize,
-        rays: (Vec3x8, Vec3x8),
+        (rays, inv_dir): ((Vec3x8, Vec3x8), Vec3x8),
         t_min: f32,
         t_max: F32x8,
         options: IntersectOptions,
     ) -> (Mask8, F32x8) {
         let Sphere { centre, radius, .. } = self.records[index];
         let sphere = (Vec3x8::splat(centre), F32x8::splat(radius));
-        spheres_lanes8(sphere, rays, t_min, t_max, options)
+        spheres_lanes8(sphere, rays, || inv_dir, (t_min, t_max), options)
     }
 }
 
-/// The body of [`Spheres::hit_lanes8`]: sphere `k` (its centre and radius) against ray `k`.
+/// The body of [`Spheres::hit_lanes8`]: sphere `k` (its centre and radius) against ray `k`,
+/// `inv_dir` giving the rays' `1 / dir` where a hit needs its trusted box's test.
 #[inline(always)]
 fn spheres_lanes8(
     (centre, radius): (Vec3x8, F32x8),
     (origin, dir): (Vec3x8, Vec3x8),
-    t_min: f32,
-    t_max: F32x8,
+    inv_dir: impl FnOnce() -> Vec3x8,
+    (t_min, t_max): (f32, F32x8),
     options: IntersectOptions,
 ) -> (Mask8, F32x8) {
     let lanes_min = F32x8::splat(t_min);
@@ -285,7 +288,7 @@ fn spheres_lanes8(
     }
     let (trusted, some) = trusted_sphere_boxes8(centre, radius, options);
     (
-        hit & some & holds_lanes8(origin, dir.recip(), &trusted, t_min, t),
+        hit & some & holds_lanes8(origin, inv_dir(), &trusted, t_min, t),
         t,
     )
 }

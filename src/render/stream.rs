@@ -221,12 +221,11 @@ fn shade_depth<'a, C: Count>(
     walk(&queue.rays[..answered.start], &mut hits, work);
     for &(hit, tested) in &queue.known {
         if C::ON {
-            // The ray, and the spheres it was tested against.
-            let mut count = C::default();
-            count.ray();
-            count.prims(tested);
             let mut own = Work::default();
-            own.add(ray_kind(depth, hits.len(), reflected), &count);
+            own.add(
+                ray_kind(depth, hits.len(), reflected),
+                &answered_work::<C>(tested),
+            );
             work.push(own);
         }
         hits.push(Some(hit));
@@ -637,12 +636,8 @@ impl<'a> ShadowQueue<'a> {
                     let answered = enclosed & own.bitmask();
                     walked &= !answered;
                     if C::ON {
-                        // Each such ray, and its one primitive test.
                         for_lanes(answered, |k| {
-                            let mut count = C::default();
-                            count.ray();
-                            count.prims(1);
-                            counted(entry << 3 | k as u32, count);
+                            counted(entry << 3 | k as u32, answered_work(1))
                         });
                     }
                 }
@@ -679,6 +674,15 @@ impl<'a> ShadowQueue<'a> {
 /// its light reaches.
 fn unlit(lit: &mut [u8], tag: u32) {
     lit[tag as usize >> 3] &= !(1 << (tag & 7));
+}
+
+/// The work of a ray that primitives' own tests answered, `tested` of them, without a walk:
+/// it counts as traced, with those tests.
+fn answered_work<C: Count>(tested: u32) -> C {
+    let mut count = C::default();
+    count.ray();
+    count.prims(tested);
+    count
 }
 
 /// The bits `k` of eight lanes where `f(k)` holds.

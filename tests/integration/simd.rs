@@ -583,7 +583,7 @@ proptest! {
             storage.hit_lanes8(indices, lanes, t_min, F32x8::from_fn(|k| t_max[k]), options);
         // And sphere `indices[0]` against every lane.
         let (one_hit, one_t) =
-            storage.hit_one8(indices[0], lanes, t_min, F32x8::from_fn(|k| t_max[k]), options);
+            storage.hit_one8(indices[0], (lanes, lanes.1.recip()), t_min, F32x8::from_fn(|k| t_max[k]), options);
         for k in 0..8 {
             let query = RayQuery::new(&rays[k], t_min, options);
             let scalar = storage.intersect(indices[k], &query, t_max[k]).map(|h| h.t.to_bits());
