@@ -587,7 +587,7 @@ fn trace_tile<C: Count>(
                     }
                 }
                 // Their rays eight at a time; a short last chunk repeats its first sample.
-                let mut primary = stream::Queue::with_capacity_in(gathered.len(), arena);
+                let mut primary = stream::Queue::primary_in(gathered.len(), arena);
                 for chunk in gathered.chunks(8) {
                     let film = |k: usize| &chunk.get(k).unwrap_or(&chunk[0]).0;
                     let rays = camera.rays8(film);

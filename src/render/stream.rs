@@ -13,14 +13,13 @@
 //! as the scalar path. A depth queues its reflected rays, then its transmitted ones; those
 //! made inside a sphere (refracted into it, reflected within it) that the sphere and the
 //! spheres near it answer as they are made ([`crate::accel::Tracer::closest_in_sphere8`])
-//! go between the two, with their hits, and are not walked. Once
+//! go between the two, with their hits, and are not walked; each of the four is a part of
+//! the queue of its own, filled where its rays are made. Once
 //! the deepest queue is shaded, colours flow back up: each ray's colour, clamped if it
 //! hit something, is added to its parent's with its weight, in the order the scalar
 //! [`Shader::trace`] adds them, so the image is the scalar one byte for byte. Where the
 //! render counts (`C` of [`crate::accel::count`]), each ray's work flows up with its
 //! colour, so that a pixel's cost is what its samples' rays took.
-
-use std::ops::Range;
 
 use bumpalo::collections::Vec as ArenaVec;
 use bumpalo::Bump;
@@ -37,23 +36,70 @@ use crate::prim::{PrimId, PrimKind};
 use crate::ray::{Hit, Ray};
 use crate::simd::{for_lanes, F32x8, Mask8, Vec3x8};
 
-/// The rays of one depth, and what they bring back. The rays lie side by side, where the
-/// scheduler reads them; all else a ray carries is in two records, a push each (a push
-/// per field was a twentieth of a render's instructions).
+/// The rays of one depth, and what they bring back, in four parts, each filled where its
+/// rays are made (no part is copied after another): the reflected rays that are walked
+/// ([`WALKED_REFLECTED`], at depth 1 the primary rays), then the reflected and the
+/// transmitted rays that start inside spheres, which gave their hits as the rays were
+/// made ([`crate::accel::Tracer::closest_in_sphere8`]), then the transmitted rays that are
+/// walked. The queue's order is the parts' in turn; a ray's [`slot`] names its part and
+/// its place there. In each part the rays lie side by side, where the scheduler reads
+/// them; all else a ray carries is in two records, a push each (a push per field was a
+/// twentieth of a render's instructions).
 pub(super) struct Queue<'a, C> {
-    rays: ArenaVec<'a, Ray>,
-    lineage: ArenaVec<'a, Lineage>,
-    seen: ArenaVec<'a, Seen>,
-    /// Below depth 1, the rays before this index are reflected, the others transmitted.
-    reflected: usize,
-    /// The rays in this range start inside spheres, which gave their hits as the rays
-    /// were made ([`crate::accel::Tracer::closest_in_sphere8`]): those hits, in `known`,
-    /// each with the spheres tested. The rays before and after the range are walked.
-    answered: Range<usize>,
-    known: ArenaVec<'a, (Hit, u32)>,
+    rays: Parts<'a, Ray>,
+    lineage: Parts<'a, Lineage>,
+    /// The answered parts' hits, each with the spheres tested to find it.
+    known: Parts<'a, (Hit, u32)>,
+    seen: Parts<'a, Seen>,
     /// Where the render counts, each ray's work by kind: its own, its shadow rays' and
     /// its children's, added as they are traced; empty otherwise.
-    work: ArenaVec<'a, Work<C>>,
+    work: Parts<'a, Work<C>>,
+}
+
+/// The parts of a queue, in the queue's order.
+const WALKED_REFLECTED: usize = 0;
+const INNER_REFLECTED: usize = 1;
+const INNER_TRANSMITTED: usize = 2;
+const WALKED_TRANSMITTED: usize = 3;
+
+/// Whether the rays of part `part` come with their hits.
+fn answered(part: usize) -> bool {
+    part == INNER_REFLECTED || part == INNER_TRANSMITTED
+}
+
+/// One array per part of a queue.
+type Parts<'a, T> = [ArenaVec<'a, T>; 4];
+
+/// Parts with room for `capacity[p]` elements in part `p`.
+fn parts_in<T>(capacity: [usize; 4], arena: &Bump) -> Parts<'_, T> {
+    std::array::from_fn(|p| ArenaVec::with_capacity_in(capacity[p], arena))
+}
+
+/// The bits of a [`slot`] that hold the place in the part.
+const PLACE_BITS: u32 = 30;
+
+/// Where ray `place` of part `part` lies in its queue: both in one number.
+fn slot(part: usize, place: usize) -> u32 {
+    (part as u32) << PLACE_BITS | place as u32
+}
+
+/// The part and the place in it that `slot` names.
+fn split(slot: u32) -> (usize, usize) {
+    (
+        (slot >> PLACE_BITS) as usize,
+        (slot & ((1 << PLACE_BITS) - 1)) as usize,
+    )
+}
+
+/// The element at `slot` of a queue's parts.
+fn at<'v, T>(parts: &'v Parts<T>, slot: u32) -> &'v T {
+    let (part, place) = split(slot);
+    &parts[part][place]
+}
+
+fn at_mut<'v, T>(parts: &'v mut Parts<T>, slot: u32) -> &'v mut T {
+    let (part, place) = split(slot);
+    &mut parts[part][place]
 }
 
 /// Where a queued ray comes from, and how its colour counts there.
@@ -62,7 +108,7 @@ struct Lineage {
     sample: Sample,
     /// The index of the medium the ray travels in.
     ior: f32,
-    /// At depth 1 the tile's pixel of the sample; deeper, the index in the previous
+    /// At depth 1 the tile's pixel of the sample; deeper, the [`slot`] in the previous
     /// depth's queue of the hit that spawned the ray.
     parent: u32,
     /// The factor of the ray's colour in its parent's (one at depth 1).
@@ -79,18 +125,27 @@ struct Seen {
 }
 
 impl<'a, C: Count> Queue<'a, C> {
-    /// A queue with room for `capacity` rays: growing a vector in an arena copies it and
-    /// leaves the old one behind, so queues are made at the size they may reach.
-    pub(super) fn with_capacity_in(capacity: usize, arena: &'a Bump) -> Self {
+    /// A queue with room for `capacity[p]` rays in part `p`: growing a vector in an arena
+    /// copies it and leaves the old one behind, so queues are made at the size they may
+    /// reach.
+    fn with_capacities_in(capacity: [usize; 4], arena: &'a Bump) -> Self {
+        assert!(
+            capacity.iter().all(|&c| c < 1 << PLACE_BITS),
+            "a queue too long for its slots"
+        );
+        let answered = std::array::from_fn(|p| if answered(p) { capacity[p] } else { 0 });
         Queue {
-            rays: ArenaVec::with_capacity_in(capacity, arena),
-            lineage: ArenaVec::with_capacity_in(capacity, arena),
-            seen: ArenaVec::with_capacity_in(capacity, arena),
-            reflected: 0,
-            answered: 0..0,
-            known: ArenaVec::with_capacity_in(capacity, arena),
-            work: ArenaVec::with_capacity_in(if C::ON { capacity } else { 0 }, arena),
+            rays: parts_in(capacity, arena),
+            lineage: parts_in(capacity, arena),
+            known: parts_in(answered, arena),
+            seen: parts_in(capacity, arena),
+            work: parts_in(if C::ON { capacity } else { [0; 4] }, arena),
         }
+    }
+
+    /// A queue with room for `capacity` primary samples.
+    pub(super) fn primary_in(capacity: usize, arena: &'a Bump) -> Self {
+        Self::with_capacities_in([capacity, 0, 0, 0], arena)
     }
 
     /// Queues a primary sample of the tile's pixel `pixel`.
@@ -101,34 +156,29 @@ impl<'a, C: Count> Queue<'a, C> {
             parent: pixel,
             weight: Vec3::ONE,
         };
-        self.push(ray, lineage);
+        self.push(WALKED_REFLECTED, ray, lineage);
     }
 
-    fn push(&mut self, ray: Ray, lineage: Lineage) {
-        push_reserved(&mut self.rays, ray);
-        push_reserved(&mut self.lineage, lineage);
+    /// Queues a ray in part `part`.
+    fn push(&mut self, part: usize, ray: Ray, lineage: Lineage) {
+        push_reserved(&mut self.rays[part], ray);
+        push_reserved(&mut self.lineage[part], lineage);
     }
 
     fn len(&self) -> usize {
-        self.rays.len()
+        self.rays.iter().map(|part| part.len()).sum()
     }
 
-    /// Queues a ray whose hit is known: `answer`, the hit and the spheres tested to find it.
-    fn push_answered(&mut self, ray: Ray, lineage: Lineage, answer: (Hit, u32)) {
-        self.push(ray, lineage);
-        push_reserved(&mut self.known, answer);
+    /// Queues a ray whose hit is known in the answered part `part`: `answer`, the hit and
+    /// the spheres tested to find it.
+    fn push_answered(&mut self, part: usize, ray: Ray, lineage: Lineage, answer: (Hit, u32)) {
+        self.push(part, ray, lineage);
+        push_reserved(&mut self.known[part], answer);
     }
 
-    /// Queues the rays of `other` (not yet traced) after its own.
-    fn append(&mut self, other: &Queue<C>) {
-        self.rays.extend_from_slice(&other.rays);
-        self.lineage.extend_from_slice(&other.lineage);
-        self.known.extend_from_slice(&other.known);
-    }
-
-    /// Ray `i`'s colour as its parent takes it.
-    fn colour_seen(&self, i: usize) -> Vec3 {
-        let Seen { colour, hit } = self.seen[i];
+    /// The colour of ray `place` of part `part` as its parent takes it.
+    fn colour_seen(&self, part: usize, place: usize) -> Vec3 {
+        let Seen { colour, hit } = self.seen[part][place];
         if hit {
             colour.clamp(Vec3::ZERO, Vec3::ONE)
         } else {
@@ -167,25 +217,27 @@ pub(super) fn trace<'a, C: Count>(
         }
         queue = next;
     }
-    // Children add to their parents, deepest first.
+    // Children add to their parents, deepest first, in queue order: a parent's reflected
+    // child comes before its transmitted one.
     while let Some(queue) = depths.pop() {
-        match depths.last_mut() {
-            Some(parents) => {
-                for i in 0..queue.len() {
-                    let Lineage { parent, weight, .. } = queue.lineage[i];
-                    let parent = parent as usize;
-                    parents.seen[parent].colour += weight * queue.colour_seen(i);
-                    if C::ON {
-                        parents.work[parent].merge(&queue.work[i]);
+        for (p, lineage) in queue.lineage.iter().enumerate() {
+            match depths.last_mut() {
+                Some(parents) => {
+                    for (j, &Lineage { parent, weight, .. }) in lineage.iter().enumerate() {
+                        at_mut(&mut parents.seen, parent).colour +=
+                            weight * queue.colour_seen(p, j);
+                        if C::ON {
+                            at_mut(&mut parents.work, parent).merge(&queue.work[p][j]);
+                        }
                     }
                 }
-            }
-            None => {
-                for i in 0..queue.len() {
-                    let pixel = queue.lineage[i].parent as usize;
-                    sums[pixel] += queue.colour_seen(i);
-                    if C::ON {
-                        work[pixel].merge(&queue.work[i]);
+                None => {
+                    for (j, lineage) in lineage.iter().enumerate() {
+                        let pixel = lineage.parent as usize;
+                        sums[pixel] += queue.colour_seen(p, j);
+                        if C::ON {
+                            work[pixel].merge(&queue.work[p][j]);
+                        }
                     }
                 }
             }
@@ -203,49 +255,49 @@ fn shade_depth<'a, C: Count>(
     rays: &mut RayCounts,
 ) -> Queue<'a, C> {
     let n = queue.len();
-    let mut hits = ArenaVec::with_capacity_in(n, arena);
-    let (work, reflected) = (&mut queue.work, queue.reflected);
-    let walk = |rays: &[Ray], hits: &mut ArenaVec<Option<Hit>>, work: &mut ArenaVec<_>| {
-        stream::closest_rays_counting::<C>(shader.tracer, rays, |found, lanes| {
-            if C::ON {
-                for k in 0..found.len() {
+    let longest = queue.rays.iter().map(|part| part.len()).max().unwrap_or(0);
+    let mut hits = ArenaVec::with_capacity_in(longest, arena);
+    let mut blocks = HitBlocks::with_capacity_in(n, arena);
+    for p in 0..4 {
+        let (rays, seen, work) = (&queue.rays[p], &mut queue.seen[p], &mut queue.work[p]);
+        let kind = ray_kind(depth, p);
+        hits.clear();
+        if !answered(p) {
+            stream::closest_rays_counting::<C>(shader.tracer, rays, |found, lanes| {
+                if C::ON {
+                    for k in 0..found.len() {
+                        let mut own = Work::default();
+                        own.add(kind, &lanes.lane(k));
+                        work.push(own);
+                    }
+                }
+                hits.extend_from_slice(found);
+            });
+        } else {
+            for &(hit, tested) in &queue.known[p] {
+                if C::ON {
                     let mut own = Work::default();
-                    own.add(ray_kind(depth, hits.len() + k, reflected), &lanes.lane(k));
+                    own.add(kind, &answered_work::<C>(tested));
                     work.push(own);
                 }
+                hits.push(Some(hit));
             }
-            hits.extend_from_slice(found);
-        });
-    };
-    let answered = queue.answered.clone();
-    walk(&queue.rays[..answered.start], &mut hits, work);
-    for &(hit, tested) in &queue.known {
-        if C::ON {
-            let mut own = Work::default();
-            own.add(
-                ray_kind(depth, hits.len(), reflected),
-                &answered_work::<C>(tested),
-            );
-            work.push(own);
         }
-        hits.push(Some(hit));
-    }
-    walk(&queue.rays[answered.end..], &mut hits, work);
-    let mut blocks = HitBlocks::with_capacity_in(n, arena);
-    for (i, (hit, ray)) in hits.iter().zip(&queue.rays).enumerate() {
-        match hit {
-            Some(hit) => {
-                queue.seen.push(Seen {
-                    colour: Vec3::ZERO,
-                    hit: true,
-                });
-                blocks.push(shader, i as u32, ray, *hit);
-            }
-            None => {
-                queue.seen.push(Seen {
-                    colour: shader.background(ray.dir, depth),
-                    hit: false,
-                });
+        for (j, (hit, ray)) in hits.iter().zip(rays).enumerate() {
+            match hit {
+                Some(hit) => {
+                    seen.push(Seen {
+                        colour: Vec3::ZERO,
+                        hit: true,
+                    });
+                    blocks.push(shader, slot(p, j), ray, *hit);
+                }
+                None => {
+                    seen.push(Seen {
+                        colour: shader.background(ray.dir, depth),
+                        hit: false,
+                    });
+                }
             }
         }
     }
@@ -267,7 +319,7 @@ fn shade_depth<'a, C: Count>(
             colour = lit.select_vec(colour + added, colour);
         }
         for_lanes(block.lanes, |k| {
-            queue.seen[block.ray[k] as usize].colour = colour.lane(k)
+            at_mut(&mut queue.seen, block.ray[k]).colour = colour.lane(k)
         });
     }
 
@@ -277,19 +329,22 @@ fn shade_depth<'a, C: Count>(
     // a surface on one side (a glass sphere's reflections outside it, its refractions
     // inside), and each parent still receives its reflected colour before its
     // transmitted one, the scalar order of its sum.
-    let mut next = Queue::with_capacity_in(2 * n, arena);
-    if depth < shader.options.max_depth {
-        let mut transmitted = Queue::with_capacity_in(n, arena);
-        // The rays that start inside spheres and that the spheres answer, reflected and
-        // transmitted: queued between the other reflected rays and transmitted ones, so
-        // that each parent's reflected ray still comes before its transmitted one.
-        let mut inner = [(); 2].map(|_| Queue::with_capacity_in(n, arena));
+    // The rays that start inside spheres and that the spheres answer, reflected and
+    // transmitted, are queued between the other reflected rays and transmitted ones, so
+    // that each parent's reflected ray still comes before its transmitted one.
+    let room = if depth < shader.options.max_depth {
+        n
+    } else {
+        0
+    };
+    let mut next = Queue::with_capacities_in([room; 4], arena);
+    if room > 0 {
         for block in &blocks {
             let optics = Optics8::new(block.material.map(|m| &shader.scene.materials[m as usize]));
             if optics.spawns_none() {
                 continue;
             }
-            let ior_here = F32x8::from_array(block.ray.map(|i| queue.lineage[i as usize].ior));
+            let ior_here = F32x8::from_array(block.ray.map(|i| at(&queue.lineage, i).ior));
             let inside = Mask8::from_bitmask(block.inside);
             let schlick = shader.options.schlick;
             let bounce = Bounce8::new(block.dir, block.nf, inside, ior_here, &optics, schlick);
@@ -306,8 +361,8 @@ fn shade_depth<'a, C: Count>(
             let inner_reflected = answers.answered & block.inside;
             let inner_through = answers.answered & !block.inside;
             let reflected_ray = |k: usize| {
-                let i = block.ray[k] as usize;
-                let Lineage { sample, ior, .. } = queue.lineage[i];
+                let i = block.ray[k];
+                let Lineage { sample, ior, .. } = *at(&queue.lineage, i);
                 let sample = sample.spawn(0);
                 let ray = Ray {
                     origin: block.origin.lane(k),
@@ -320,68 +375,55 @@ fn shade_depth<'a, C: Count>(
                     Lineage {
                         sample,
                         ior,
-                        parent: i as u32,
+                        parent: i,
                         weight,
                     },
                 )
             };
             for_lanes(reflected & !inner_reflected, |k| {
                 let (ray, lineage) = reflected_ray(k);
-                next.push(ray, lineage);
+                next.push(WALKED_REFLECTED, ray, lineage);
             });
             for_lanes(inner_reflected, |k| {
                 let (ray, lineage) = reflected_ray(k);
-                inner[0].push_answered(ray, lineage, answers.hit(k));
+                next.push_answered(INNER_REFLECTED, ray, lineage, answers.hit(k));
             });
             let transmitted_ray = |k: usize| {
-                let i = block.ray[k] as usize;
+                let i = block.ray[k];
                 let ray = Ray {
                     origin: inward.lane(k),
                     dir: bounce.refracted.lane(k),
                     time: block.time.lane(k),
                 };
                 let lineage = Lineage {
-                    sample: queue.lineage[i].sample.spawn(1),
+                    sample: at(&queue.lineage, i).sample.spawn(1),
                     ior: bounce.ior_next.lane(k),
-                    parent: i as u32,
+                    parent: i,
                     weight: bounce.transmitted_weight.lane(k),
                 };
                 (ray, lineage)
             };
             for_lanes(inner_through, |k| {
                 let (ray, lineage) = transmitted_ray(k);
-                inner[1].push_answered(ray, lineage, answers.hit(k));
+                next.push_answered(INNER_TRANSMITTED, ray, lineage, answers.hit(k));
             });
             for_lanes(through & !inner_through, |k| {
                 let (ray, lineage) = transmitted_ray(k);
-                transmitted.push(ray, lineage);
+                next.push(WALKED_TRANSMITTED, ray, lineage);
             });
         }
-        let [inner_reflected, inner_transmitted] = &inner;
-        rays.add(
-            RayKind::Reflection,
-            (next.len() + inner_reflected.len()) as u64,
-        );
-        rays.add(
-            RayKind::Refraction,
-            (inner_transmitted.len() + transmitted.len()) as u64,
-        );
-        let first = next.len();
-        next.append(inner_reflected);
-        next.reflected = next.len();
-        next.append(inner_transmitted);
-        next.answered = first..next.len();
-        next.append(&transmitted);
+        for p in 0..4 {
+            rays.add(ray_kind(depth + 1, p), next.rays[p].len() as u64);
+        }
     }
     next
 }
 
-/// The kind of ray `i` of a queue of depth `depth` whose first `reflected` rays are
-/// reflected ones.
-fn ray_kind(depth: u32, i: usize, reflected: usize) -> RayKind {
-    match depth {
-        1 => RayKind::Primary,
-        _ if i < reflected => RayKind::Reflection,
+/// The kind of the rays of part `part` of a queue of depth `depth`.
+fn ray_kind(depth: u32, part: usize) -> RayKind {
+    match part {
+        _ if depth == 1 => RayKind::Primary,
+        WALKED_REFLECTED | INNER_REFLECTED => RayKind::Reflection,
         _ => RayKind::Refraction,
     }
 }
@@ -401,7 +443,7 @@ struct HitBlock {
     prim: [PrimId; 8],
     /// Whether the points have error bounds (all but with the `course` profile).
     bounded: bool,
-    /// Each lane's index in the depth's queue.
+    /// Each lane's [`slot`] in the depth's queue.
     ray: [u32; 8],
     material: [u32; 8],
     point: Vec3x8,
@@ -597,7 +639,7 @@ impl<'a> ShadowQueue<'a> {
         // The work of the shadow ray tagged `tag` (its entry and lane, below).
         let mut counted = |tag: u32, count: C| {
             let block = &blocks[(tag >> 3) as usize % blocks.len()];
-            work[block.ray[(tag & 7) as usize] as usize]
+            at_mut(work, block.ray[(tag & 7) as usize])
                 .shadow
                 .add(&count);
         };
@@ -609,7 +651,7 @@ impl<'a> ShadowQueue<'a> {
                     normal: block.nf,
                     origin: block.origin,
                 };
-                let sample = |k: usize| lineage[block.ray[k] as usize].sample;
+                let sample = |k: usize| at(lineage, block.ray[k]).sample;
                 let (facing, incident) = emitter.sample8(index, &receiver, sample);
                 let facing = facing.bitmask() & block.lanes;
                 let entry = lit.len() as u32;
