@@ -491,7 +491,8 @@ struct Dda {
     last: [i32; 3],
     /// Per axis, where the ray crosses the plane after `last` (infinite where there is
     /// none), where the slab after `last` may start (that crossing less the allowance),
-    /// and where `first` may end if another follows it (infinite otherwise).
+    /// and where `first` may end if another follows it (infinite otherwise; the largest
+    /// float along an axis the ray creeps along, whose crossings cannot be timed).
     t_plane: [f32; 3],
     t_join: [f32; 3],
     t_drop: [f32; 3],
@@ -554,6 +555,9 @@ impl Dda {
         // A first guess, which the ranges below correct: the cell of the entry point.
         let guess = grid.cell_of(ray.at(t_enter)).as_ivec3().to_array();
         let walks = |k: usize| ray.dir[k] != 0.0 && inv_dir[k].is_finite();
+        // An axis the ray moves along so slowly (a direction of 1e-38) that the planes'
+        // error, as a distance along the ray, overflows: no crossing of it can be timed.
+        let creeps = |k: usize| walks(k) && !(grid.plane_error[k] * inv_dir[k].abs()).is_finite();
         let mut dda = Dda {
             cell: IVec3::from_array(guess),
             step: [0, 1, 2].map(|k| match walks(k) {
@@ -580,7 +584,7 @@ impl Dda {
             t_joined: t_enter,
             t_end: t_leave,
         };
-        for k in (0..3).filter(|&k| walks(k)) {
+        for k in (0..3).filter(|&k| walks(k) && !creeps(k)) {
             // The slabs the ray may be in at `t_enter`: from the first whose exit may
             // come after it to the last whose entry may come before it.
             let step = dda.step[k];
@@ -603,6 +607,26 @@ impl Dda {
             (dda.t_plane[k], dda.t_join[k]) = (exit_b, dda.early(k, exit_b));
             if a != b {
                 dda.t_drop[k] = dda.late(k, exit_a);
+            }
+        }
+        for k in (0..3).filter(|&k| creeps(k)) {
+            // The slabs of every point the ray passes, with the planes' error to spare,
+            // all visited at every step, none joined or dropped (fuzz finding crash-99d9).
+            let at = |t: f32| ray.origin[k] + ray.dir[k] * t;
+            let (near, far) = (at(t_enter), at(t_leave));
+            let slab = |x: f32| {
+                let mut point = ray.origin;
+                point[k] = x;
+                grid.cell_of(point).as_ivec3()[k]
+            };
+            let error = grid.plane_error[k];
+            let (low, high) = (slab(near.min(far) - error), slab(near.max(far) + error));
+            (dda.first[k], dda.last[k]) = match dda.step[k] > 0 {
+                true => (low, high),
+                false => (high, low),
+            };
+            if low != high {
+                dda.t_drop[k] = f32::MAX;
             }
         }
         dda.cell = IVec3::from_array(dda.first);

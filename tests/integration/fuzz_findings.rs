@@ -672,3 +672,41 @@ fn crash_8fc3_agrees_with_the_standard_profile() {
 fn crash_8fc3_agrees_with_the_course_profile() {
     assert_agrees(&CRASH_8FC3, Profile::Course);
 }
+
+/// crash-99d94ce45f86 (2026-12-05, at 5645eed), made smaller: a sphere of radius 7.5 at
+/// (7.5, 7.5, 7.5) among triangles reaching 1e9 away, and a ray from its centre along z
+/// whose y direction is 2e-38, a subnormal. At density 0.5 the centre lies within the
+/// planes' error (1,900 units) of a y plane, the sphere in the slab below it; that error
+/// as a distance along the ray overflowed, and so did the plane's crossing, and the walk
+/// took the ray to have left that slab long before it started. Fixed in `accel::grid`:
+/// along an axis where that error overflows, the walk visits every slab the ray may be
+/// in, the error to spare, at every step.
+#[test]
+fn the_grid_walks_a_ray_with_a_subnormal_direction() {
+    let scene = parse_text(
+        "s 7.5 7.5 7.5 7.5\n\
+         p 3 0.000000000000000000000000000000000000013146161 0 0 -0.5 -1000000000 7.5 7.5 7.5 7.5\n\
+         p 3 -4 1000000000 -1000000000 7.5 2.5 0.000000000000000000000000000000000000023586956 0 -1000000000 2.5\n\
+         p 3 -4 1000000000 -1000000000 7.5 2.5 0.000000000000000000000000000000000000023586956 0 -1000000000 2.5\n",
+    )
+    .unwrap();
+    let g = &scene.geometry;
+    let brute = Tracer::new(g, &AccelOptions::brute_force());
+    let ray = Ray::new(Vec3::splat(7.5), Vec3::new(0.0, 1.9729865e-38, 1.0));
+    let expected = brute.closest(&ray, 0.0, f32::INFINITY);
+    assert!(expected.is_some());
+    for (mailbox, grid_density) in [(false, 2.0), (true, 2.0), (false, 0.5)] {
+        let options = AccelOptions {
+            kind: AccelKind::Grid,
+            mailbox,
+            grid_density,
+            ..AccelOptions::default()
+        };
+        let grid = Tracer::new(g, &options);
+        let name = format!("mailbox {mailbox}, density {grid_density}");
+        assert_eq!(grid.closest(&ray, 0.0, f32::INFINITY), expected, "{name}");
+        let rays = [ray; PACKET];
+        let packet = RayPacket::new(&rays);
+        assert_eq!(grid.closest_packet(&packet), [expected; PACKET], "{name}");
+    }
+}
