@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use crate::prim::PrimId;
-use crate::simd::{Bits, F32xP, Floats, LaneBits, Vec3Lanes, Vec3xP, PACKET};
+use crate::simd::{bits_where, Bits, F32xP, Floats, LaneBits, Vec3Lanes, Vec3xP, PACKET};
 
 /// A ray `origin + t * dir`. `dir` is unit length wherever the renderer makes rays: the
 /// intersection routines rely on it (the sphere test skips the `dot(d, d)` term).
@@ -65,10 +65,8 @@ pub struct RayPacket<'r> {
 }
 
 /// The bit mask of a packet's lanes `0..PACKET` for which `pred` holds.
-pub fn lane_mask(mut pred: impl FnMut(usize) -> bool) -> LaneBits {
-    (0..PACKET)
-        .filter(|&k| pred(k))
-        .fold(LaneBits::EMPTY, |mask, k| mask.with(k))
+pub fn lane_mask(pred: impl FnMut(usize) -> bool) -> LaneBits {
+    bits_where(pred)
 }
 
 impl<'r> RayPacket<'r> {

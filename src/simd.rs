@@ -93,6 +93,8 @@ pub trait Bits:
     Copy + Eq + Debug + BitAnd<Output = Self> + BitOr<Output = Self> + Not<Output = Self>
 {
     const EMPTY: Self;
+    /// How many lanes it holds.
+    const LANES: usize;
     /// The lowest `n` lanes.
     fn first(n: usize) -> Self;
     fn has(self, lane: usize) -> bool;
@@ -108,6 +110,7 @@ macro_rules! bits {
     ($($t:ty),*) => {$(
         impl Bits for $t {
             const EMPTY: $t = 0;
+            const LANES: usize = <$t>::BITS as usize;
             #[inline(always)]
             fn first(n: usize) -> Self {
                 ((1u32 << n) - 1) as $t
@@ -140,6 +143,13 @@ macro_rules! bits {
     )*};
 }
 bits!(u8, u16);
+
+/// The bits of the lanes `k` where `pred(k)` holds.
+pub fn bits_where<B: Bits>(mut pred: impl FnMut(usize) -> bool) -> B {
+    (0..B::LANES)
+        .filter(|&k| pred(k))
+        .fold(B::EMPTY, |mask, k| mask.with(k))
+}
 
 /// Calls `f` with the index of each set bit of `mask` (a [`LaneMask::bitmask`]), lowest
 /// first.

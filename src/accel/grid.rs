@@ -484,7 +484,8 @@ struct Dda {
     origin: [f32; 3],
     inv_dir: [f32; 3],
     /// Per axis, how much later or earlier than computed the ray may cross a boundary
-    /// of `cell_of` because the plane is not quite there (`plane_error * |inv_dir|`).
+    /// of `cell_of` because the plane is not quite there (`plane_error * |inv_dir|`,
+    /// finite; zero along an axis the ray creeps along, whose crossings are not timed).
     slack: [f32; 3],
     /// Per axis, the first and the last slab the ray may be in.
     first: [i32; 3],
@@ -555,9 +556,12 @@ impl Dda {
         // A first guess, which the ranges below correct: the cell of the entry point.
         let guess = grid.cell_of(ray.at(t_enter)).as_ivec3().to_array();
         let walks = |k: usize| ray.dir[k] != 0.0 && inv_dir[k].is_finite();
-        // An axis the ray moves along so slowly (a direction of 1e-38) that the planes'
-        // error, as a distance along the ray, overflows: no crossing of it can be timed.
-        let creeps = |k: usize| walks(k) && !(grid.plane_error[k] * inv_dir[k].abs()).is_finite();
+        // The planes' error as a distance along the ray. Along an axis the ray moves along
+        // so slowly (a direction of 1e-38) that it overflows, the ray creeps: no crossing
+        // of its planes can be timed.
+        let slack = |k: usize| grid.plane_error[k] * inv_dir[k].abs();
+        let creeps = |k: usize| walks(k) && !slack(k).is_finite();
+        let timed = |k: usize| walks(k) && !creeps(k);
         let mut dda = Dda {
             cell: IVec3::from_array(guess),
             step: [0, 1, 2].map(|k| match walks(k) {
@@ -570,9 +574,8 @@ impl Dda {
             }),
             origin: ray.origin.to_array(),
             inv_dir: inv_dir.to_array(),
-            slack: [0, 1, 2].map(|k| match walks(k) {
-                // Finite, so that an infinite crossing (no plane) stays infinite.
-                true => (grid.plane_error[k] * inv_dir[k].abs()).min(f32::MAX),
+            slack: [0, 1, 2].map(|k| match timed(k) {
+                true => slack(k),
                 false => 0.0,
             }),
             first: guess,
@@ -584,7 +587,7 @@ impl Dda {
             t_joined: t_enter,
             t_end: t_leave,
         };
-        for k in (0..3).filter(|&k| walks(k) && !creeps(k)) {
+        for k in (0..3).filter(|&k| timed(k)) {
             // The slabs the ray may be in at `t_enter`: from the first whose exit may
             // come after it to the last whose entry may come before it.
             let step = dda.step[k];

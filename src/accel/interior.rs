@@ -84,7 +84,7 @@ impl Rooms {
             near: Vec::new(),
             options,
         };
-        let margin = |b: &Aabb| MARGIN * f64::from((b.max - b.min).max_element());
+        let margin = |b: &Aabb| MARGIN * f64::from(b.extent().max_element());
         // The spheres by the lower x of their boxes grown by the margin (rounded down), so
         // that the rooms a primitive's box may reach are one run of them. An empty or
         // vanishing box (a sphere never hit) answers nothing.
@@ -92,8 +92,8 @@ impl Rooms {
         let (mut widest, mut reach) = (0.0f64, Aabb::EMPTY);
         for i in 0..spheres {
             let b = rooms.bounds(geometry, i);
-            let side = (b.max - b.min).max_element();
-            let vanishing = b.is_empty() || side.is_nan() || side < 1e-20;
+            let side = b.extent().max_element();
+            let vanishing = b.is_empty() || !(side >= 1e-20);
             if vanishing || !glass(geometry.spheres.records[i].material) {
                 rooms.rooms[i] = CROWDED;
                 continue;

@@ -469,14 +469,19 @@ impl<'a> Shader<'a> {
         }
     }
 
+    /// Whether every reflected direction is the mirror direction ([`Shader::fuzz`]).
+    pub(super) fn reflects_as_mirrors(&self) -> bool {
+        self.options.roughness == 0.0
+    }
+
     /// A reflected direction: the `mirror` direction, or with roughness g > 0 the
     /// direction of `mirror + g q` for `q` uniform in the unit ball, unless that one
     /// points below the surface of normal `nf` (P3F.md 6.4).
     pub(super) fn fuzz(&self, mirror: Vec3, nf: Vec3, rng: &SampleRng) -> Vec3 {
-        let g = self.options.roughness;
-        if g == 0.0 {
+        if self.reflects_as_mirrors() {
             return mirror;
         }
+        let g = self.options.roughness;
         let dir = (mirror + g * rng.unit_ball(dim::FUZZ)).normalize();
         if dir.dot(nf) > 0.0 {
             dir

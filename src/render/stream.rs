@@ -34,7 +34,7 @@ use crate::accel::SphereAnswers;
 use crate::intersect::spawn_origin8;
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{Hit, Ray};
-use crate::simd::{for_lanes, F32x8, Mask8, Vec3x8};
+use crate::simd::{bits_where, for_lanes, F32x8, Mask8, Vec3x8};
 
 /// The rays of one depth, and what they bring back, in four parts, each filled where its
 /// rays are made (no part is copied after another): the reflected rays that are walked
@@ -255,51 +255,46 @@ fn shade_depth<'a, C: Count>(
     rays: &mut RayCounts,
 ) -> Queue<'a, C> {
     let n = queue.len();
-    let longest = queue.rays.iter().map(|part| part.len()).max().unwrap_or(0);
+    // The walked parts' hits, a part at a time.
+    let longest = queue.rays[WALKED_REFLECTED]
+        .len()
+        .max(queue.rays[WALKED_TRANSMITTED].len());
     let mut hits = ArenaVec::with_capacity_in(longest, arena);
     let mut blocks = HitBlocks::with_capacity_in(n, arena);
     for p in 0..4 {
         let (rays, seen, work) = (&queue.rays[p], &mut queue.seen[p], &mut queue.work[p]);
         let kind = ray_kind(depth, p);
-        hits.clear();
-        if !answered(p) {
-            stream::closest_rays_counting::<C>(shader.tracer, rays, |found, lanes| {
-                if C::ON {
-                    for k in 0..found.len() {
-                        let mut own = Work::default();
-                        own.add(kind, &lanes.lane(k));
-                        work.push(own);
-                    }
-                }
-                hits.extend_from_slice(found);
-            });
-        } else {
-            for &(hit, tested) in &queue.known[p] {
-                if C::ON {
+        if answered(p) {
+            let known = &queue.known[p];
+            if C::ON {
+                for &(_, tested) in known {
                     let mut own = Work::default();
                     own.add(kind, &answered_work::<C>(tested));
                     work.push(own);
                 }
-                hits.push(Some(hit));
             }
+            // Read where they were kept, not copied among the walked parts' hits.
+            let found = known.iter().map(|&(hit, _)| Some(hit));
+            blocks.take(shader, (depth, p), rays.iter().zip(found), seen);
+            continue;
         }
-        for (j, (hit, ray)) in hits.iter().zip(rays).enumerate() {
-            match hit {
-                Some(hit) => {
-                    seen.push(Seen {
-                        colour: Vec3::ZERO,
-                        hit: true,
-                    });
-                    blocks.push(shader, slot(p, j), ray, *hit);
-                }
-                None => {
-                    seen.push(Seen {
-                        colour: shader.background(ray.dir, depth),
-                        hit: false,
-                    });
+        hits.clear();
+        stream::closest_rays_counting::<C>(shader.tracer, rays, |found, lanes| {
+            if C::ON {
+                for k in 0..found.len() {
+                    let mut own = Work::default();
+                    own.add(kind, &lanes.lane(k));
+                    work.push(own);
                 }
             }
-        }
+            hits.extend_from_slice(found);
+        });
+        blocks.take(
+            shader,
+            (depth, p),
+            rays.iter().zip(hits.iter().copied()),
+            seen,
+        );
     }
     let blocks = blocks.finish(shader);
     let shadows = ShadowQueue::trace(shader, arena, queue, &blocks);
@@ -509,7 +504,7 @@ impl HitBlock {
         inward: Vec3x8,
         (reflected, through): (u8, u8),
     ) -> SphereAnswers {
-        let mirrors = if shader.options.roughness == 0.0 {
+        let mirrors = if shader.reflects_as_mirrors() {
             reflected & self.inside
         } else {
             0
@@ -520,7 +515,7 @@ impl HitBlock {
         }
         // The lanes in the sphere of the first: eight lanes of one sphere are the rule.
         let sphere = self.prim[lanes.trailing_zeros() as usize];
-        let lanes = lanes & bits8(|k| self.prim[k] == sphere);
+        let lanes = lanes & bits_where::<u8>(|k| self.prim[k] == sphere);
         let inside = Mask8::from_bitmask(self.inside);
         let origin = inside.select_vec(self.origin, inward);
         let dir = inside.select_vec(bounce.mirror, bounce.refracted);
@@ -569,6 +564,35 @@ impl<'a> HitBlocks<'a> {
             hits: [none; 8],
             rays: [Ray::new(Vec3::ZERO, Vec3::ZERO); 8],
             filled: 0,
+        }
+    }
+
+    /// Takes the rays of part `part` of a queue of depth `depth` with what each found: a
+    /// hit into the blocks, each ray's colour so far into `seen`.
+    #[inline(always)]
+    fn take<'r>(
+        &mut self,
+        shader: &Shader,
+        (depth, part): (u32, usize),
+        found: impl Iterator<Item = (&'r Ray, Option<Hit>)>,
+        seen: &mut ArenaVec<Seen>,
+    ) {
+        for (j, (ray, hit)) in found.enumerate() {
+            match hit {
+                Some(hit) => {
+                    seen.push(Seen {
+                        colour: Vec3::ZERO,
+                        hit: true,
+                    });
+                    self.push(shader, slot(part, j), ray, hit);
+                }
+                None => {
+                    seen.push(Seen {
+                        colour: shader.background(ray.dir, depth),
+                        hit: false,
+                    });
+                }
+            }
         }
     }
 
@@ -725,9 +749,4 @@ fn answered_work<C: Count>(tested: u32) -> C {
     count.ray();
     count.prims(tested);
     count
-}
-
-/// The bits `k` of eight lanes where `f(k)` holds.
-fn bits8(f: impl Fn(usize) -> bool) -> u8 {
-    (0..8).fold(0, |mask, k| mask | u8::from(f(k)) << k)
 }
