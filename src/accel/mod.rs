@@ -256,9 +256,9 @@ pub struct SphereAnswers {
     /// The lanes answered.
     pub answered: u8,
     /// In those lanes, the closest hit's `t` and sphere, and how many spheres were tested.
-    t: F32x8,
-    sphere: [u32; 8],
-    tested: [u32; 8],
+    pub t: F32x8,
+    pub sphere: [u32; 8],
+    pub tested: [u32; 8],
 }
 
 impl SphereAnswers {
@@ -270,16 +270,15 @@ impl SphereAnswers {
         tested: [0; 8],
     };
 
-    /// Lane `k`'s hit, and the spheres tested to find it (an answered lane).
+    /// Lane `k`'s hit (an answered lane).
     #[inline]
-    pub fn hit(&self, k: usize) -> (Hit, u32) {
-        let hit = Hit {
+    pub fn hit(&self, k: usize) -> Hit {
+        Hit {
             t: self.t.lane(k),
             prim: PrimId::new(PrimKind::Sphere, self.sphere[k]),
             u: 0.0,
             v: 0.0,
-        };
-        (hit, self.tested[k])
+        }
     }
 }
 

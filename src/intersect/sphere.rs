@@ -463,15 +463,30 @@ impl Shapes for Spheres {
         sphere_surface_point(centre, radius, ray, t)
     }
 
-    /// The scalar surface point (`sphere_surface_point`) eight at a time; a lane whose
-    /// offset from the centre has no direction (rare) is left to the scalar form.
+    /// The scalar surface point (`sphere_surface_point`) eight at a time;
+    /// [`Spheres::surface_points_along8`] of the rays' lanes.
     fn surface_points8(&self, indices: [usize; 8], rays: &[Ray; 8], hits: &Hits8) -> SurfacePoint8 {
+        let origin = Vec3x8::from_lanes(rays.map(|r| r.origin));
+        let dir = Vec3x8::from_lanes(rays.map(|r| r.dir));
+        self.surface_points_along8(indices, (origin, dir), F32x8::from_array(hits.t))
+    }
+}
+
+impl Spheres {
+    /// The surface points of eight hits given as lanes (lane `k`: sphere `indices[k]` at
+    /// `t[k]` along the ray from `origin` towards `dir`), each bit for bit the scalar
+    /// `sphere_surface_point`; a lane whose offset from the centre has no direction (rare)
+    /// is left to the scalar form.
+    pub fn surface_points_along8(
+        &self,
+        indices: [usize; 8],
+        (origin, dir): (Vec3x8, Vec3x8),
+        t: F32x8,
+    ) -> SurfacePoint8 {
         let records = indices.map(|i| &self.records[i]);
         let centre = Vec3x8::from_lanes(records.map(|r| r.centre));
         let radius = F32x8::from_array(records.map(|r| r.radius));
-        let origin = Vec3x8::from_lanes(rays.map(|r| r.origin));
-        let dir = Vec3x8::from_lanes(rays.map(|r| r.dir));
-        let from_centre = (origin - centre) + dir.scale(F32x8::from_array(hits.t));
+        let from_centre = (origin - centre) + dir.scale(t);
         let length = from_centre.length();
         let normal = from_centre / length;
         let radial = normal.scale(radius);
@@ -486,7 +501,8 @@ impl Shapes for Spheres {
         let directed = length.gt(F32x8::ZERO) & length.is_finite();
         for_lanes(!directed.bitmask(), |k| {
             let Sphere { centre, radius, .. } = *records[k];
-            points.set_lane(k, sphere_surface_point(centre, radius, &rays[k], hits.t[k]));
+            let ray = Ray::new(origin.lane(k), dir.lane(k));
+            points.set_lane(k, sphere_surface_point(centre, radius, &ray, t.lane(k)));
         });
         points
     }

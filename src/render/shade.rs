@@ -22,7 +22,7 @@ use super::light::{emitters, Emitter, Receiver, DEFAULT_LIGHT_GRID};
 use super::sampler::{dim, Sample, SampleGrid, SampleRng};
 use super::skybox::Skybox;
 use crate::accel::count::Count;
-use crate::accel::Tracer;
+use crate::accel::{SphereAnswers, Tracer};
 use crate::intersect::{spawn_origin, Hits8, SphereRoots, SurfacePoint, SurfacePoint8};
 use crate::prim::PrimKind;
 use crate::ray::{Hit, Ray};
@@ -469,6 +469,28 @@ impl<'a> Shader<'a> {
         }
     }
 
+    /// [`Shader::hit_points8`] for the hits `answers` on spheres of the rays from
+    /// `origin` towards `dir` at shutter times `time`, given as lanes: without the rays'
+    /// transposition where the profile has a twin.
+    pub(super) fn sphere_points8(
+        &self,
+        answers: &SphereAnswers,
+        (origin, dir, time): (Vec3x8, Vec3x8, F32x8),
+    ) -> SurfacePoint8 {
+        if self.options.profile == Profile::Standard {
+            let spheres = &self.tracer.geometry.spheres;
+            let indices = answers.sphere.map(|s| s as usize);
+            return spheres.surface_points_along8(indices, (origin, dir), answers.t);
+        }
+        let rays = std::array::from_fn(|k| Ray {
+            origin: origin.lane(k),
+            dir: dir.lane(k),
+            time: time.lane(k),
+        });
+        let hits = std::array::from_fn(|k| answers.hit(k));
+        self.hit_points8(&rays, &hits, Some(PrimKind::Sphere))
+    }
+
     /// Whether every reflected direction is the mirror direction ([`Shader::fuzz`]).
     pub(super) fn reflects_as_mirrors(&self) -> bool {
         self.options.roughness == 0.0
@@ -477,10 +499,19 @@ impl<'a> Shader<'a> {
     /// A reflected direction: the `mirror` direction, or with roughness g > 0 the
     /// direction of `mirror + g q` for `q` uniform in the unit ball, unless that one
     /// points below the surface of normal `nf` (P3F.md 6.4).
+    /// The mirror's case stays inline in the spawning loops; the other is out of line.
+    #[inline(always)]
     pub(super) fn fuzz(&self, mirror: Vec3, nf: Vec3, rng: &SampleRng) -> Vec3 {
         if self.reflects_as_mirrors() {
-            return mirror;
+            mirror
+        } else {
+            self.fuzz_rough(mirror, nf, rng)
         }
+    }
+
+    /// [`Shader::fuzz`] with roughness g > 0.
+    #[inline(never)]
+    fn fuzz_rough(&self, mirror: Vec3, nf: Vec3, rng: &SampleRng) -> Vec3 {
         let g = self.options.roughness;
         let dir = (mirror + g * rng.unit_ball(dim::FUZZ)).normalize();
         if dir.dot(nf) > 0.0 {

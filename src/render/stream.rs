@@ -13,9 +13,10 @@
 //! as the scalar path. A depth queues its reflected rays, then its transmitted ones; those
 //! made inside a sphere (refracted into it, reflected within it) that the sphere and the
 //! spheres near it answer as they are made ([`crate::accel::Tracer::closest_in_sphere8`])
-//! go between the two, with their hits, and are not walked; each of the four is a part of
-//! the queue of its own, filled where its rays are made. Once
-//! the deepest queue is shaded, colours flow back up: each ray's colour, clamped if it
+//! go between the two, with their hits, and are not walked: they stay the lanes of the
+//! block that made them, which become a hit block at the next depth without a gathering.
+//! Each of the three is a part of the queue of its own, filled where its rays are made.
+//! Once the deepest queue is shaded, colours flow back up: each ray's colour, clamped if it
 //! hit something, is added to its parent's with its weight, in the order the scalar
 //! [`Shader::trace`] adds them, so the image is the scalar one byte for byte. Where the
 //! render counts (`C` of [`crate::accel::count`]), each ray's work flows up with its
@@ -31,25 +32,28 @@ use super::shade::{Bounce8, Optics8, Phong8, Profile, RayCounts, RayKind, Shader
 use crate::accel::count::{Count, CountLanes};
 use crate::accel::stream::{self, Answers};
 use crate::accel::SphereAnswers;
-use crate::intersect::spawn_origin8;
+use crate::intersect::{spawn_origin8, SurfacePoint8};
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{Hit, Ray};
 use crate::simd::{bits_where, for_lanes, F32x8, Mask8, Vec3x8};
 
-/// The rays of one depth, and what they bring back, in four parts, each filled where its
+/// The rays of one depth, and what they bring back, in three parts, each filled where its
 /// rays are made (no part is copied after another): the reflected rays that are walked
 /// ([`WALKED_REFLECTED`], at depth 1 the primary rays), then the reflected and the
 /// transmitted rays that start inside spheres, which gave their hits as the rays were
-/// made ([`crate::accel::Tracer::closest_in_sphere8`]), then the transmitted rays that are
-/// walked. The queue's order is the parts' in turn; a ray's [`slot`] names its part and
-/// its place there. In each part the rays lie side by side, where the scheduler reads
-/// them; all else a ray carries is in two records, a push each (a push per field was a
-/// twentieth of a render's instructions).
+/// made ([`ANSWERED`], kept eight lanes to an [`AnsweredRays`] as their hit block made
+/// them), then the transmitted rays that are walked. The queue's order is the parts' in
+/// turn; a ray's [`slot`] names its part and its place there (in the answered part, its
+/// record's times eight plus its lane: the lanes a record does not hold pad that part's
+/// arrays). In the walked parts the rays lie side by side, where the scheduler reads them;
+/// all else a ray carries is in two records, a push each (a push per field was a twentieth
+/// of a render's instructions).
 pub(super) struct Queue<'a, C> {
     rays: Parts<'a, Ray>,
+    answered: ArenaVec<'a, AnsweredRays>,
+    /// The rays the answered part holds.
+    answered_rays: usize,
     lineage: Parts<'a, Lineage>,
-    /// The answered parts' hits, each with the spheres tested to find it.
-    known: Parts<'a, (Hit, u32)>,
     seen: Parts<'a, Seen>,
     /// Where the render counts, each ray's work by kind: its own, its shadow rays' and
     /// its children's, added as they are traced; empty otherwise.
@@ -58,20 +62,14 @@ pub(super) struct Queue<'a, C> {
 
 /// The parts of a queue, in the queue's order.
 const WALKED_REFLECTED: usize = 0;
-const INNER_REFLECTED: usize = 1;
-const INNER_TRANSMITTED: usize = 2;
-const WALKED_TRANSMITTED: usize = 3;
-
-/// Whether the rays of part `part` come with their hits.
-fn answered(part: usize) -> bool {
-    part == INNER_REFLECTED || part == INNER_TRANSMITTED
-}
+const ANSWERED: usize = 1;
+const WALKED_TRANSMITTED: usize = 2;
 
 /// One array per part of a queue.
-type Parts<'a, T> = [ArenaVec<'a, T>; 4];
+type Parts<'a, T> = [ArenaVec<'a, T>; 3];
 
 /// Parts with room for `capacity[p]` elements in part `p`.
-fn parts_in<T>(capacity: [usize; 4], arena: &Bump) -> Parts<'_, T> {
+fn parts_in<T>(capacity: [usize; 3], arena: &Bump) -> Parts<'_, T> {
     std::array::from_fn(|p| ArenaVec::with_capacity_in(capacity[p], arena))
 }
 
@@ -102,6 +100,32 @@ fn at_mut<'v, T>(parts: &'v mut Parts<T>, slot: u32) -> &'v mut T {
     &mut parts[part][place]
 }
 
+/// The rays that one hit block made inside one sphere, in the block's lanes, with the hits
+/// that sphere and its near ones gave them ([`crate::accel::Tracer::closest_in_sphere8`]):
+/// they stay lanes from the block that made them to the block of their hits, never single
+/// rays queued and gathered again.
+#[derive(Clone, Copy)]
+struct AnsweredRays {
+    /// The lanes held (`answers.answered`), each one's closest hit and spheres tested.
+    answers: SphereAnswers,
+    /// The lanes that hold reflected rays; the others held are transmitted.
+    reflected: u8,
+    origin: Vec3x8,
+    dir: Vec3x8,
+    time: F32x8,
+}
+
+impl AnsweredRays {
+    /// The kind of the ray of lane `k`.
+    fn kind(&self, k: usize) -> RayKind {
+        if self.reflected >> k & 1 != 0 {
+            RayKind::Reflection
+        } else {
+            RayKind::Refraction
+        }
+    }
+}
+
 /// Where a queued ray comes from, and how its colour counts there.
 #[derive(Clone, Copy)]
 struct Lineage {
@@ -124,28 +148,41 @@ struct Seen {
     hit: bool,
 }
 
+impl Seen {
+    /// The colour as the ray's parent takes it.
+    fn taken(&self) -> Vec3 {
+        if self.hit {
+            self.colour.clamp(Vec3::ZERO, Vec3::ONE)
+        } else {
+            self.colour
+        }
+    }
+}
+
 impl<'a, C: Count> Queue<'a, C> {
-    /// A queue with room for `capacity[p]` rays in part `p`: growing a vector in an arena
-    /// copies it and leaves the old one behind, so queues are made at the size they may
-    /// reach.
-    fn with_capacities_in(capacity: [usize; 4], arena: &'a Bump) -> Self {
+    /// A queue with room for `capacity[p]` rays in part `p` (in the answered part, a
+    /// multiple of eight): growing a vector in an arena copies it and leaves the old one
+    /// behind, so queues are made at the size they may reach.
+    fn with_capacities_in(capacity: [usize; 3], arena: &'a Bump) -> Self {
         assert!(
             capacity.iter().all(|&c| c < 1 << PLACE_BITS),
             "a queue too long for its slots"
         );
-        let answered = std::array::from_fn(|p| if answered(p) { capacity[p] } else { 0 });
+        let mut walked = capacity;
+        walked[ANSWERED] = 0;
         Queue {
-            rays: parts_in(capacity, arena),
+            rays: parts_in(walked, arena),
+            answered: ArenaVec::with_capacity_in(capacity[ANSWERED] / 8, arena),
+            answered_rays: 0,
             lineage: parts_in(capacity, arena),
-            known: parts_in(answered, arena),
             seen: parts_in(capacity, arena),
-            work: parts_in(if C::ON { capacity } else { [0; 4] }, arena),
+            work: parts_in(if C::ON { capacity } else { [0; 3] }, arena),
         }
     }
 
     /// A queue with room for `capacity` primary samples.
     pub(super) fn primary_in(capacity: usize, arena: &'a Bump) -> Self {
-        Self::with_capacities_in([capacity, 0, 0, 0], arena)
+        Self::with_capacities_in([capacity, 0, 0], arena)
     }
 
     /// Queues a primary sample of the tile's pixel `pixel`.
@@ -159,30 +196,44 @@ impl<'a, C: Count> Queue<'a, C> {
         self.push(WALKED_REFLECTED, ray, lineage);
     }
 
-    /// Queues a ray in part `part`.
+    /// Queues a ray in the walked part `part`.
     fn push(&mut self, part: usize, ray: Ray, lineage: Lineage) {
         push_reserved(&mut self.rays[part], ray);
         push_reserved(&mut self.lineage[part], lineage);
     }
 
+    /// Queues rays answered as they were made, with each lane's lineage (`lineage(k)`
+    /// for lane `k`; the lanes not held are padding).
+    fn push_answered(&mut self, rays: AnsweredRays, lineage: impl Fn(usize) -> Lineage) {
+        self.answered_rays += rays.answers.answered.count_ones() as usize;
+        push_reserved(&mut self.answered, rays);
+        for k in 0..8 {
+            push_reserved(&mut self.lineage[ANSWERED], lineage(k));
+        }
+    }
+
     fn len(&self) -> usize {
-        self.rays.iter().map(|part| part.len()).sum()
+        self.rays[WALKED_REFLECTED].len() + self.answered_rays + self.rays[WALKED_TRANSMITTED].len()
     }
 
-    /// Queues a ray whose hit is known in the answered part `part`: `answer`, the hit and
-    /// the spheres tested to find it.
-    fn push_answered(&mut self, part: usize, ray: Ray, lineage: Lineage, answer: (Hit, u32)) {
-        self.push(part, ray, lineage);
-        push_reserved(&mut self.known[part], answer);
-    }
-
-    /// The colour of ray `place` of part `part` as its parent takes it.
-    fn colour_seen(&self, part: usize, place: usize) -> Vec3 {
-        let Seen { colour, hit } = self.seen[part][place];
-        if hit {
-            colour.clamp(Vec3::ZERO, Vec3::ONE)
+    /// Calls `f` with the place, the lineage and what it saw of each ray of part `part`,
+    /// in order.
+    #[inline(always)]
+    fn for_each_ray(&self, part: usize, mut f: impl FnMut(usize, &Lineage, &Seen)) {
+        let (lineage, seen) = (&self.lineage[part], &self.seen[part]);
+        if part == ANSWERED {
+            let lanes = lineage.chunks_exact(8).zip(seen.chunks_exact(8));
+            for (r, (rays, (lineage, seen))) in self.answered.iter().zip(lanes).enumerate() {
+                let (lineage, seen): (&[_; 8], &[_; 8]) =
+                    (lineage.try_into().unwrap(), seen.try_into().unwrap());
+                for_lanes(rays.answers.answered, |k| {
+                    f(8 * r + k, &lineage[k], &seen[k])
+                });
+            }
         } else {
-            colour
+            for (j, (lineage, seen)) in lineage.iter().zip(seen).enumerate() {
+                f(j, lineage, seen);
+            }
         }
     }
 }
@@ -220,33 +271,31 @@ pub(super) fn trace<'a, C: Count>(
     // Children add to their parents, deepest first, in queue order: a parent's reflected
     // child comes before its transmitted one.
     while let Some(queue) = depths.pop() {
-        for (p, lineage) in queue.lineage.iter().enumerate() {
+        for p in 0..3 {
             match depths.last_mut() {
-                Some(parents) => {
-                    for (j, &Lineage { parent, weight, .. }) in lineage.iter().enumerate() {
-                        at_mut(&mut parents.seen, parent).colour +=
-                            weight * queue.colour_seen(p, j);
-                        if C::ON {
-                            at_mut(&mut parents.work, parent).merge(&queue.work[p][j]);
-                        }
+                Some(parents) => queue.for_each_ray(p, |j, lineage, seen| {
+                    let Lineage { parent, weight, .. } = *lineage;
+                    at_mut(&mut parents.seen, parent).colour += weight * seen.taken();
+                    if C::ON {
+                        at_mut(&mut parents.work, parent).merge(&queue.work[p][j]);
                     }
-                }
-                None => {
-                    for (j, lineage) in lineage.iter().enumerate() {
-                        let pixel = lineage.parent as usize;
-                        sums[pixel] += queue.colour_seen(p, j);
-                        if C::ON {
-                            work[pixel].merge(&queue.work[p][j]);
-                        }
+                }),
+                None => queue.for_each_ray(p, |j, lineage, seen| {
+                    let pixel = lineage.parent as usize;
+                    sums[pixel] += seen.taken();
+                    if C::ON {
+                        work[pixel].merge(&queue.work[p][j]);
                     }
-                }
+                }),
             }
         }
     }
 }
 
 /// Traces the rays of `queue`, which are of `depth`, and their shadow rays, sets each
-/// one's local colour, and returns the queue of the rays their hits spawn.
+/// one's local colour, and returns the queue of the rays their hits spawn. Kept out of
+/// line: inlined, it spread into the tile loop, whose primary samples then took longer.
+#[inline(never)]
 fn shade_depth<'a, C: Count>(
     shader: &Shader,
     arena: &'a Bump,
@@ -260,24 +309,37 @@ fn shade_depth<'a, C: Count>(
         .len()
         .max(queue.rays[WALKED_TRANSMITTED].len());
     let mut hits = ArenaVec::with_capacity_in(longest, arena);
-    let mut blocks = HitBlocks::with_capacity_in(n, arena);
-    for p in 0..4 {
+    let walked = n - queue.answered_rays;
+    let mut blocks = HitBlocks::with_capacity_in(walked.div_ceil(8) + queue.answered.len(), arena);
+    for p in 0..3 {
         let (rays, seen, work) = (&queue.rays[p], &mut queue.seen[p], &mut queue.work[p]);
-        let kind = ray_kind(depth, p);
-        if answered(p) {
-            let known = &queue.known[p];
-            if C::ON {
-                for &(_, tested) in known {
-                    let mut own = Work::default();
-                    own.add(kind, &answered_work::<C>(tested));
-                    work.push(own);
+        if p == ANSWERED {
+            for (r, answered) in queue.answered.iter().enumerate() {
+                // Every lane hit (those not held are padding, never read).
+                for _ in 0..8 {
+                    push_reserved(
+                        seen,
+                        Seen {
+                            colour: Vec3::ZERO,
+                            hit: true,
+                        },
+                    );
                 }
+                if C::ON {
+                    for k in 0..8 {
+                        let mut own = Work::default();
+                        if answered.answers.answered >> k & 1 != 0 {
+                            let tested = answered.answers.tested[k];
+                            own.add(answered.kind(k), &answered_work::<C>(tested));
+                        }
+                        work.push(own);
+                    }
+                }
+                blocks.push_answered(shader, answered, r);
             }
-            // Read where they were kept, not copied among the walked parts' hits.
-            let found = known.iter().map(|&(hit, _)| Some(hit));
-            blocks.take(shader, (depth, p), rays.iter().zip(found), seen);
             continue;
         }
+        let kind = ray_kind(depth, p);
         hits.clear();
         stream::closest_rays_counting::<C>(shader.tracer, rays, |found, lanes| {
             if C::ON {
@@ -325,14 +387,17 @@ fn shade_depth<'a, C: Count>(
     // inside), and each parent still receives its reflected colour before its
     // transmitted one, the scalar order of its sum.
     // The rays that start inside spheres and that the spheres answer, reflected and
-    // transmitted, are queued between the other reflected rays and transmitted ones, so
-    // that each parent's reflected ray still comes before its transmitted one.
+    // transmitted, are queued between the other reflected rays and transmitted ones: a
+    // parent has one of them at most (its reflected ray if it arrived from inside, else
+    // its transmitted one), so each parent's reflected ray still comes before its
+    // transmitted one.
     let room = if depth < shader.options.max_depth {
         n
     } else {
         0
     };
-    let mut next = Queue::with_capacities_in([room; 4], arena);
+    let answered_room = if room > 0 { 8 * blocks.len() } else { 0 };
+    let mut next = Queue::with_capacities_in([room, answered_room, room], arena);
     if room > 0 {
         for block in &blocks {
             let optics = Optics8::new(block.material.map(|m| &shader.scene.materials[m as usize]));
@@ -351,74 +416,79 @@ fn shade_depth<'a, C: Count>(
             } else {
                 block.origin
             };
-            let answers = block.inner_answers(shader, &bounce, inward, (reflected, through));
+            let answered = block.inner_answers(shader, &bounce, inward, (reflected, through));
             // A lane's ray inside its sphere is its reflected one if it arrived from inside.
-            let inner_reflected = answers.answered & block.inside;
-            let inner_through = answers.answered & !block.inside;
-            let reflected_ray = |k: usize| {
+            let (inner_reflected, inner_through) = match &answered {
+                Some(rays) => (rays.reflected, rays.answers.answered & !rays.reflected),
+                None => (0, 0),
+            };
+            let reflected_lineage = |k: usize| {
                 let i = block.ray[k];
                 let Lineage { sample, ior, .. } = *at(&queue.lineage, i);
-                let sample = sample.spawn(0);
-                let ray = Ray {
-                    origin: block.origin.lane(k),
-                    dir: shader.fuzz(bounce.mirror.lane(k), block.nf.lane(k), &sample.rng),
-                    time: block.time.lane(k),
-                };
-                let weight = bounce.reflected_weight.lane(k);
-                (
-                    ray,
-                    Lineage {
-                        sample,
-                        ior,
-                        parent: i,
-                        weight,
-                    },
-                )
+                Lineage {
+                    sample: sample.spawn(0),
+                    ior,
+                    parent: i,
+                    weight: bounce.reflected_weight.lane(k),
+                }
+            };
+            let transmitted_lineage = |k: usize| {
+                let i = block.ray[k];
+                Lineage {
+                    sample: at(&queue.lineage, i).sample.spawn(1),
+                    ior: bounce.ior_next.lane(k),
+                    parent: i,
+                    weight: bounce.transmitted_weight.lane(k),
+                }
             };
             for_lanes(reflected & !inner_reflected, |k| {
-                let (ray, lineage) = reflected_ray(k);
+                let lineage = reflected_lineage(k);
+                let mirror = bounce.mirror.lane(k);
+                let ray = Ray {
+                    origin: block.origin.lane(k),
+                    dir: shader.fuzz(mirror, block.nf.lane(k), &lineage.sample.rng),
+                    time: block.time.lane(k),
+                };
                 next.push(WALKED_REFLECTED, ray, lineage);
             });
-            for_lanes(inner_reflected, |k| {
-                let (ray, lineage) = reflected_ray(k);
-                next.push_answered(INNER_REFLECTED, ray, lineage, answers.hit(k));
-            });
-            let transmitted_ray = |k: usize| {
-                let i = block.ray[k];
+            if let Some(rays) = answered {
+                next.push_answered(rays, |k| {
+                    if inner_reflected >> k & 1 != 0 {
+                        reflected_lineage(k)
+                    } else {
+                        transmitted_lineage(k)
+                    }
+                });
+            }
+            for_lanes(through & !inner_through, |k| {
                 let ray = Ray {
                     origin: inward.lane(k),
                     dir: bounce.refracted.lane(k),
                     time: block.time.lane(k),
                 };
-                let lineage = Lineage {
-                    sample: at(&queue.lineage, i).sample.spawn(1),
-                    ior: bounce.ior_next.lane(k),
-                    parent: i,
-                    weight: bounce.transmitted_weight.lane(k),
-                };
-                (ray, lineage)
-            };
-            for_lanes(inner_through, |k| {
-                let (ray, lineage) = transmitted_ray(k);
-                next.push_answered(INNER_TRANSMITTED, ray, lineage, answers.hit(k));
-            });
-            for_lanes(through & !inner_through, |k| {
-                let (ray, lineage) = transmitted_ray(k);
-                next.push(WALKED_TRANSMITTED, ray, lineage);
+                next.push(WALKED_TRANSMITTED, ray, transmitted_lineage(k));
             });
         }
-        for p in 0..4 {
+        for p in [WALKED_REFLECTED, WALKED_TRANSMITTED] {
             rays.add(ray_kind(depth + 1, p), next.rays[p].len() as u64);
+        }
+        for answered in &next.answered {
+            let (lanes, reflected) = (answered.answers.answered, answered.reflected);
+            rays.add(RayKind::Reflection, u64::from(reflected.count_ones()));
+            rays.add(
+                RayKind::Refraction,
+                u64::from((lanes & !reflected).count_ones()),
+            );
         }
     }
     next
 }
 
-/// The kind of the rays of part `part` of a queue of depth `depth`.
+/// The kind of the rays of the walked part `part` of a queue of depth `depth`.
 fn ray_kind(depth: u32, part: usize) -> RayKind {
     match part {
         _ if depth == 1 => RayKind::Primary,
-        WALKED_REFLECTED | INNER_REFLECTED => RayKind::Reflection,
+        WALKED_REFLECTED => RayKind::Reflection,
         _ => RayKind::Refraction,
     }
 }
@@ -426,7 +496,7 @@ fn ray_kind(depth: u32, part: usize) -> RayKind {
 /// Eight hits of a depth as structure of arrays, for the shading of eight at a time.
 #[derive(Clone, Copy, Debug)]
 struct HitBlock {
-    /// The lanes that hold a hit; the others repeat lane 0.
+    /// The lanes that hold a hit; the others repeat the first that does.
     lanes: u8,
     /// The lanes whose ray arrived from inside the surface.
     inside: u8,
@@ -455,10 +525,9 @@ struct HitBlock {
 }
 
 impl HitBlock {
-    /// The block of the hits `hits` of the rays `rays` (at the indices `ray` of the
-    /// depth's queue), whose first `count` lanes are hits and whose others repeat lane 0:
-    /// the points recomputed on the surfaces ([`Shader::hit_points8`]) and the normals
-    /// turned to face the rays, as [`Shader::hit_point`] turns them.
+    /// The block of the hits `hits` of the rays `rays` (at the [`slot`]s `ray`), whose
+    /// first `count` lanes are hits and whose others repeat lane 0: the points recomputed
+    /// on the surfaces ([`Shader::hit_points8`]).
     fn new(
         shader: &Shader,
         rays: &[Ray; 8],
@@ -470,40 +539,87 @@ impl HitBlock {
         let kind = PrimId::shared_kind(&prims);
         let surface = shader.hit_points8(rays, hits, kind);
         let dir = Vec3x8::from_fn(|k| rays[k].dir);
+        let time = F32x8::from_array(rays.map(|r| r.time));
+        let lanes = ((1u16 << count) - 1) as u8;
+        Self::on_surface(shader, &surface, (dir, time), (prims, kind), (*ray, lanes))
+    }
+
+    /// The block of the hits of `rays`, record `record` of the answered part: the points
+    /// recomputed on the spheres from the lanes as they are ([`Shader::sphere_points8`]),
+    /// the lanes not held repeating the first held, as a gathered block's do.
+    fn answered(shader: &Shader, rays: &AnsweredRays, record: usize) -> Self {
+        let AnsweredRays {
+            mut answers,
+            mut origin,
+            mut dir,
+            mut time,
+            ..
+        } = *rays;
+        let lanes = answers.answered;
+        let mut ray = std::array::from_fn(|k| slot(ANSWERED, 8 * record + k));
+        if lanes != u8::MAX {
+            let first = lanes.trailing_zeros() as usize;
+            let held = Mask8::from_bitmask(lanes);
+            origin = held.select_vec(origin, Vec3x8::splat(origin.lane(first)));
+            dir = held.select_vec(dir, Vec3x8::splat(dir.lane(first)));
+            time = held.select(time, F32x8::splat(time.lane(first)));
+            answers.t = held.select(answers.t, F32x8::splat(answers.t.lane(first)));
+            for_lanes(!lanes, |k| {
+                (answers.sphere[k], ray[k]) = (answers.sphere[first], ray[first]);
+            });
+        }
+        let surface = shader.sphere_points8(&answers, (origin, dir, time));
+        let prims = answers.sphere.map(|s| PrimId::new(PrimKind::Sphere, s));
+        let kind = Some(PrimKind::Sphere);
+        Self::on_surface(shader, &surface, (dir, time), (prims, kind), (ray, lanes))
+    }
+
+    /// The block of hits on the points `surface`, by the rays of directions `dir` at the
+    /// shutter times `time`, on the primitives `prims` (of kind `kind` if they share one),
+    /// at the slots `ray`, of which the lanes `lanes` hold hits: the normals turned to face
+    /// the rays, as [`Shader::hit_point`] turns them, and the points offset off them.
+    #[inline(always)]
+    fn on_surface(
+        shader: &Shader,
+        surface: &SurfacePoint8,
+        (dir, time): (Vec3x8, F32x8),
+        (prims, kind): ([PrimId; 8], Option<PrimKind>),
+        (ray, lanes): ([u32; 8], u8),
+    ) -> Self {
         let inside = dir.dot(surface.normal).gt(F32x8::ZERO);
         let nf = inside.select_vec(-surface.normal, surface.normal);
         let geometry = &shader.tracer.geometry;
         let mut block = HitBlock {
-            lanes: ((1u16 << count) - 1) as u8,
+            lanes,
             inside: inside.bitmask(),
             spheres: kind == Some(PrimKind::Sphere),
             prim: prims,
             bounded: shader.options.profile == Profile::Standard,
-            ray: *ray,
+            ray,
             material: geometry.materials8(kind, prims),
             point: surface.point,
             nf,
             error: surface.error,
             origin: Vec3x8::ZERO,
             dir,
-            time: F32x8::from_array(rays.map(|r| r.time)),
+            time,
         };
         block.origin = block.offset(nf);
         block
     }
 
-    /// The closest hits of the rays this block spawns inside its spheres, where the spheres
-    /// answer them ([`crate::accel::Tracer::closest_in_sphere8`]): of the lanes that
-    /// reflect (`reflected`) those that arrived from inside, and of those that transmit
-    /// (`through`, starting at `inward`) those that arrived from outside. Fuzzy reflections
-    /// are left to the walks.
+    /// The rays this block spawns inside its spheres with their closest hits, where the
+    /// spheres answer them ([`crate::accel::Tracer::closest_in_sphere8`]): of the lanes
+    /// that reflect (`reflected`) those that arrived from inside, and of those that
+    /// transmit (`through`, starting at `inward`) those that arrived from outside. Fuzzy
+    /// reflections are left to the walks.
     fn inner_answers(
         &self,
         shader: &Shader,
         bounce: &Bounce8,
         inward: Vec3x8,
         (reflected, through): (u8, u8),
-    ) -> SphereAnswers {
+    ) -> Option<AnsweredRays> {
         let mirrors = if shader.reflects_as_mirrors() {
             reflected & self.inside
         } else {
@@ -511,7 +627,7 @@ impl HitBlock {
         };
         let lanes = mirrors | (through & !self.inside);
         if !self.spheres || lanes == 0 {
-            return SphereAnswers::NONE;
+            return None;
         }
         // The lanes in the sphere of the first: eight lanes of one sphere are the rule.
         let sphere = self.prim[lanes.trailing_zeros() as usize];
@@ -519,9 +635,16 @@ impl HitBlock {
         let inside = Mask8::from_bitmask(self.inside);
         let origin = inside.select_vec(self.origin, inward);
         let dir = inside.select_vec(bounce.mirror, bounce.refracted);
-        shader
+        let answers = shader
             .tracer
-            .closest_in_sphere8(sphere.index(), (origin, dir), lanes)
+            .closest_in_sphere8(sphere.index(), (origin, dir), lanes);
+        (answers.answered != 0).then_some(AnsweredRays {
+            answers,
+            reflected: answers.answered & self.inside,
+            origin,
+            dir,
+            time: self.time,
+        })
     }
 
     /// The points offset towards `side` (a unit vector per lane), as `Surface::origin`
@@ -550,7 +673,8 @@ struct HitBlocks<'a> {
 }
 
 impl<'a> HitBlocks<'a> {
-    fn with_capacity_in(hits: usize, arena: &'a Bump) -> Self {
+    /// Room for `blocks` blocks.
+    fn with_capacity_in(blocks: usize, arena: &'a Bump) -> Self {
         // What the lanes hold before their first hit: each is written before it is read.
         let none = Hit {
             t: 0.0,
@@ -559,7 +683,7 @@ impl<'a> HitBlocks<'a> {
             v: 0.0,
         };
         HitBlocks {
-            blocks: ArenaVec::with_capacity_in(hits.div_ceil(8), arena),
+            blocks: ArenaVec::with_capacity_in(blocks, arena),
             ray: [0; 8],
             hits: [none; 8],
             rays: [Ray::new(Vec3::ZERO, Vec3::ZERO); 8],
@@ -567,8 +691,8 @@ impl<'a> HitBlocks<'a> {
         }
     }
 
-    /// Takes the rays of part `part` of a queue of depth `depth` with what each found: a
-    /// hit into the blocks, each ray's colour so far into `seen`.
+    /// Takes the rays of the walked part `part` of a queue of depth `depth` with what each
+    /// found: a hit into the blocks, each ray's colour so far into `seen`.
     #[inline(always)]
     fn take<'r>(
         &mut self,
@@ -619,6 +743,14 @@ impl<'a> HitBlocks<'a> {
         let block = HitBlock::new(shader, &self.rays, &self.ray, &self.hits, count);
         self.blocks.push(block);
         self.filled = 0;
+    }
+
+    /// Adds the block of the hits of `rays`, record `record` of the answered part, made
+    /// whole, not gathered (out of line, so that the block is made in place, not copied).
+    #[inline(never)]
+    fn push_answered(&mut self, shader: &Shader, rays: &AnsweredRays, record: usize) {
+        let block = HitBlock::answered(shader, rays, record);
+        push_reserved(&mut self.blocks, block);
     }
 
     fn finish(mut self, shader: &Shader) -> ArenaVec<'a, HitBlock> {

@@ -308,7 +308,7 @@ fn a_near_spheres_hit_beyond_the_box_is_left_to_the_walk() {
     );
     assert_eq!(answers.answered, 1);
     assert_eq!(
-        Some(answers.hit(0).0),
+        Some(answers.hit(0)),
         brute.closest(&centre, 0.0, f32::INFINITY)
     );
 }
@@ -425,7 +425,7 @@ proptest! {
         let answers = brute.closest_in_sphere8(sphere, lanes, 0xff);
         for (k, ray) in rays.iter().enumerate().filter(|(k, _)| answers.answered >> k & 1 == 1) {
             let expected = brute.closest(ray, 0.0, f32::INFINITY);
-            prop_assert_eq!(Some(answers.hit(k).0), expected, "lane {}: {:?}", k, ray);
+            prop_assert_eq!(Some(answers.hit(k)), expected, "lane {}: {:?}", k, ray);
         }
     }
 
