@@ -16,7 +16,8 @@
 //! go between the two, with their hits, and are not walked: they stay the lanes of the
 //! block that made them, which become a hit block at the next depth without a gathering.
 //! Each of the three is a part of the queue of its own, filled where its rays are made.
-//! Once the deepest queue is shaded, colours flow back up: each ray's colour, clamped if it
+//! A block that no light reaches (inside glass, most) skips its Blinn-Phong sums. Once
+//! the deepest queue is shaded, colours flow back up: each ray's colour, clamped if it
 //! hit something, is added to its parent's with its weight, in the order the scalar
 //! [`Shader::trace`] adds them, so the image is the scalar one byte for byte. Where the
 //! render counts (`C` of [`crate::accel::count`]), each ray's work flows up with its
@@ -362,6 +363,14 @@ fn shade_depth<'a, C: Count>(
     let shadows = ShadowQueue::trace(shader, arena, queue, &blocks);
     rays.shadow += shadows.traced;
     for (b, block) in blocks.iter().enumerate() {
+        // The lanes some light reaches; the others keep the black their hits were taken
+        // with (inside a glass sphere, most blocks).
+        let lit_by_any = (0..shadows.lights).fold(0, |lanes, light| {
+            lanes | shadows.lit[light * blocks.len() + b]
+        });
+        if lit_by_any == 0 {
+            continue;
+        }
         let phong = Phong8::new(block.material.map(|m| &shader.phong[m as usize]));
         let mut colour = Vec3x8::ZERO;
         for light in 0..shadows.lights {
@@ -375,7 +384,7 @@ fn shade_depth<'a, C: Count>(
             // The scalar sum skips an unlit light: its lanes keep their bits.
             colour = lit.select_vec(colour + added, colour);
         }
-        for_lanes(block.lanes, |k| {
+        for_lanes(lit_by_any, |k| {
             at_mut(&mut queue.seen, block.ray[k]).colour = colour.lane(k)
         });
     }
