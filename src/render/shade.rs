@@ -499,6 +499,7 @@ impl<'a> Shader<'a> {
     /// A reflected direction: the `mirror` direction, or with roughness g > 0 the
     /// direction of `mirror + g q` for `q` uniform in the unit ball, unless that one
     /// points below the surface of normal `nf` (P3F.md 6.4).
+    ///
     /// The mirror's case stays inline in the spawning loops; the other is out of line.
     #[inline(always)]
     pub(super) fn fuzz(&self, mirror: Vec3, nf: Vec3, rng: &SampleRng) -> Vec3 {
