@@ -52,8 +52,6 @@ use crate::simd::{bits_where, for_lanes, F32x8, Mask8, Vec3x8};
 pub(super) struct Queue<'a, C> {
     rays: Parts<'a, Ray>,
     answered: ArenaVec<'a, AnsweredRays>,
-    /// The rays the answered part holds.
-    answered_rays: usize,
     lineage: Parts<'a, Lineage>,
     seen: Parts<'a, Seen>,
     /// Where the render counts, each ray's work by kind: its own, its shadow rays' and
@@ -174,7 +172,6 @@ impl<'a, C: Count> Queue<'a, C> {
         Queue {
             rays: parts_in(walked, arena),
             answered: ArenaVec::with_capacity_in(capacity[ANSWERED] / 8, arena),
-            answered_rays: 0,
             lineage: parts_in(capacity, arena),
             seen: parts_in(capacity, arena),
             work: parts_in(if C::ON { capacity } else { [0; 3] }, arena),
@@ -206,15 +203,23 @@ impl<'a, C: Count> Queue<'a, C> {
     /// Queues rays answered as they were made, with each lane's lineage (`lineage(k)`
     /// for lane `k`; the lanes not held are padding).
     fn push_answered(&mut self, rays: AnsweredRays, lineage: impl Fn(usize) -> Lineage) {
-        self.answered_rays += rays.answers.answered.count_ones() as usize;
         push_reserved(&mut self.answered, rays);
         for k in 0..8 {
             push_reserved(&mut self.lineage[ANSWERED], lineage(k));
         }
     }
 
+    /// The rays of the walked parts.
+    fn walked(&self) -> usize {
+        self.rays[WALKED_REFLECTED].len() + self.rays[WALKED_TRANSMITTED].len()
+    }
+
     fn len(&self) -> usize {
-        self.rays[WALKED_REFLECTED].len() + self.answered_rays + self.rays[WALKED_TRANSMITTED].len()
+        let answered = self.answered.iter();
+        self.walked()
+            + answered
+                .map(|r| r.answers.answered.count_ones() as usize)
+                .sum::<usize>()
     }
 
     /// Calls `f` with the place, the lineage and what it saw of each ray of part `part`,
@@ -310,8 +315,8 @@ fn shade_depth<'a, C: Count>(
         .len()
         .max(queue.rays[WALKED_TRANSMITTED].len());
     let mut hits = ArenaVec::with_capacity_in(longest, arena);
-    let walked = n - queue.answered_rays;
-    let mut blocks = HitBlocks::with_capacity_in(walked.div_ceil(8) + queue.answered.len(), arena);
+    let room = queue.walked().div_ceil(8) + queue.answered.len();
+    let mut blocks = HitBlocks::with_capacity_in(room, arena);
     for p in 0..3 {
         let (rays, seen, work) = (&queue.rays[p], &mut queue.seen[p], &mut queue.work[p]);
         if p == ANSWERED {
