@@ -355,7 +355,7 @@ fn shade_depth<'a, C: Count>(
                     work.push(own);
                 }
             }
-            hits.extend_from_slice(found);
+            hits.extend_from_slice_copy(found);
         });
         blocks.take(
             shader,
