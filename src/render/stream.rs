@@ -355,7 +355,7 @@ fn shade_depth<'a, C: Count>(
                     work.push(own);
                 }
             }
-            hits.extend_from_slice_copy(found);
+            hits.extend_from_slice(found);
         });
         blocks.take(
             shader,
