@@ -364,7 +364,7 @@ impl<'a> Shader<'a> {
             emit(Spawned {
                 ray: Ray {
                     origin: surface.outward,
-                    dir: self.fuzz(mirror, nf, &sample.rng),
+                    dir: self.fuzz(mirror, nf, sample.rng),
                     time: ray.time,
                 },
                 kind: RayKind::Reflection,
@@ -500,26 +500,27 @@ impl<'a> Shader<'a> {
     /// direction of `mirror + g q` for `q` uniform in the unit ball, unless that one
     /// points below the surface of normal `nf` (P3F.md 6.4).
     ///
-    /// The mirror's case stays inline in the spawning loops; the other is out of line.
+    /// Inline in the spawning loops but for the random offset, whose call takes neither
+    /// a direction nor a reference: what a call is handed by reference lives on the stack,
+    /// written in narrow stores, and the spawning loops' ray and lineage, copied whole
+    /// from there into the queue, would wait for those stores (no store forwarding).
     #[inline(always)]
-    pub(super) fn fuzz(&self, mirror: Vec3, nf: Vec3, rng: &SampleRng) -> Vec3 {
+    pub(super) fn fuzz(&self, mirror: Vec3, nf: Vec3, rng: SampleRng) -> Vec3 {
         if self.reflects_as_mirrors() {
-            mirror
-        } else {
-            self.fuzz_rough(mirror, nf, rng)
+            return mirror;
         }
-    }
-
-    /// [`Shader::fuzz`] with roughness g > 0.
-    #[inline(never)]
-    fn fuzz_rough(&self, mirror: Vec3, nf: Vec3, rng: &SampleRng) -> Vec3 {
-        let g = self.options.roughness;
-        let dir = (mirror + g * rng.unit_ball(dim::FUZZ)).normalize();
+        let dir = (mirror + self.fuzz_offset(rng)).normalize();
         if dir.dot(nf) > 0.0 {
             dir
         } else {
             mirror
         }
+    }
+
+    /// [`Shader::fuzz`]'s offset from the mirror direction, g q.
+    #[inline(never)]
+    fn fuzz_offset(&self, rng: SampleRng) -> Vec3 {
+        self.options.roughness * rng.unit_ball(dim::FUZZ)
     }
 
     /// Blinn-Phong over the lights that face the surface (normal `nf` facing the ray) and
@@ -1093,7 +1094,7 @@ mod tests {
             let mut sum = 0.0;
             with_shader(g, |shader| {
                 for i in 0..4000 {
-                    let dir = shader.fuzz(mirror, nf, &SampleRng::new(i, 0, 3));
+                    let dir = shader.fuzz(mirror, nf, SampleRng::new(i, 0, 3));
                     assert!(dir.dot(nf) > 0.0);
                     assert!((dir.length() - 1.0).abs() < 1e-5);
                     sum += dir.dot(mirror).clamp(-1.0, 1.0).acos();

@@ -455,29 +455,16 @@ fn shade_depth<'a, C: Count>(
                     weight: bounce.transmitted_weight.lane(k),
                 }
             };
-            let mut push_reflected = |k: usize, dir: Vec3, lineage: Lineage| {
+            for_lanes(reflected & !inner_reflected, |k| {
+                let lineage = reflected_lineage(k);
+                let mirror = bounce.mirror.lane(k);
                 let ray = Ray {
                     origin: block.origin.lane(k),
-                    dir,
+                    dir: shader.fuzz(mirror, block.nf.lane(k), lineage.sample.rng),
                     time: block.time.lane(k),
                 };
                 next.push(WALKED_REFLECTED, ray, lineage);
-            };
-            // Mirrors apart: a direction that may go to the rough case's call is put on
-            // the stack for it, and read back from there whole it waits for its three
-            // narrow stores to reach the cache (no store forwarding).
-            if shader.reflects_as_mirrors() {
-                for_lanes(reflected & !inner_reflected, |k| {
-                    push_reflected(k, bounce.mirror.lane(k), reflected_lineage(k))
-                });
-            } else {
-                for_lanes(reflected & !inner_reflected, |k| {
-                    let lineage = reflected_lineage(k);
-                    let mirror = bounce.mirror.lane(k);
-                    let dir = shader.fuzz(mirror, block.nf.lane(k), &lineage.sample.rng);
-                    push_reflected(k, dir, lineage)
-                });
-            }
+            });
             if let Some(rays) = answered {
                 next.push_answered(rays, |k| {
                     if inner_reflected >> k & 1 != 0 {
