@@ -317,8 +317,10 @@ pub struct RayRange {
     exit_origin: Vec3,
     inv_lo: Vec3,
     inv_hi: Vec3,
-    /// Per axis, whether the directions are negative: rays enter through `max`.
-    negative: [bool; 3],
+    /// Bit `k` set where the directions are negative on axis `k`: rays enter through
+    /// `max`. One byte, stored once: three flags stored apart and read as one word wait
+    /// for their stores to reach the cache (no store forwarding).
+    negative: u8,
 }
 
 impl RayRange {
@@ -326,26 +328,26 @@ impl RayRange {
     /// inverse directions lie within `[inv_lo, inv_hi]`, or `None` when on some axis the
     /// directions differ in sign.
     fn from_bounds([o_lo, o_hi]: [Vec3; 2], [inv_lo, inv_hi]: [Vec3; 2]) -> Option<Self> {
-        let mut range = RayRange {
-            entry_origin: o_hi,
-            exit_origin: o_lo,
-            inv_lo,
-            inv_hi,
-            negative: [false; 3],
-        };
+        let (mut entry_origin, mut exit_origin, mut negative) = (o_hi, o_lo, 0);
         for k in 0..3 {
             // Clamped inverse directions are never zero, so each lies on one side.
             match (inv_lo[k] > 0.0, inv_hi[k] < 0.0) {
                 (true, _) => {}
                 (_, true) => {
-                    range.negative[k] = true;
-                    range.entry_origin[k] = o_lo[k];
-                    range.exit_origin[k] = o_hi[k];
+                    negative |= 1 << k;
+                    entry_origin[k] = o_lo[k];
+                    exit_origin[k] = o_hi[k];
                 }
                 _ => return None,
             }
         }
-        Some(range)
+        Some(RayRange {
+            entry_origin,
+            exit_origin,
+            inv_lo,
+            inv_hi,
+            negative,
+        })
     }
 
     /// Whether any of the rays may be inside the box `[min, max]` (with `min <= max`)
@@ -355,7 +357,7 @@ impl RayRange {
         let mut entry = t_min;
         let mut exit = t_max;
         for k in 0..3 {
-            let (near, far) = if self.negative[k] {
+            let (near, far) = if self.negative >> k & 1 != 0 {
                 (max[k], min[k])
             } else {
                 (min[k], max[k])
@@ -380,7 +382,7 @@ impl RayRange {
             (boxes.min.z, boxes.max.z),
         ];
         for (k, (min, max)) in axes.into_iter().enumerate() {
-            let (near, far) = if self.negative[k] {
+            let (near, far) = if self.negative >> k & 1 != 0 {
                 (max, min)
             } else {
                 (min, max)
