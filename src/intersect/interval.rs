@@ -350,6 +350,17 @@ impl RayRange {
         })
     }
 
+    /// A box's bounds on axis `k` as the rays meet them: the one they enter through,
+    /// then the one they leave through.
+    #[inline(always)]
+    fn near_far<T>(&self, k: usize, min: T, max: T) -> (T, T) {
+        if self.negative >> k & 1 != 0 {
+            (max, min)
+        } else {
+            (min, max)
+        }
+    }
+
     /// Whether any of the rays may be inside the box `[min, max]` (with `min <= max`)
     /// within `[t_min, t_max]`, `t_max` the largest of the lanes'.
     #[inline]
@@ -357,11 +368,7 @@ impl RayRange {
         let mut entry = t_min;
         let mut exit = t_max;
         for k in 0..3 {
-            let (near, far) = if self.negative >> k & 1 != 0 {
-                (max[k], min[k])
-            } else {
-                (min[k], max[k])
-            };
+            let (near, far) = self.near_far(k, min[k], max[k]);
             let a = near - self.entry_origin[k];
             let b = far - self.exit_origin[k];
             entry = greater(lesser(a * self.inv_lo[k], a * self.inv_hi[k]), entry);
@@ -382,11 +389,7 @@ impl RayRange {
             (boxes.min.z, boxes.max.z),
         ];
         for (k, (min, max)) in axes.into_iter().enumerate() {
-            let (near, far) = if self.negative >> k & 1 != 0 {
-                (max, min)
-            } else {
-                (min, max)
-            };
+            let (near, far) = self.near_far(k, min, max);
             let a = near - F32x8::splat(self.entry_origin[k]);
             let b = far - F32x8::splat(self.exit_origin[k]);
             let (lo, hi) = (F32x8::splat(self.inv_lo[k]), F32x8::splat(self.inv_hi[k]));
