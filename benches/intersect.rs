@@ -2,12 +2,14 @@
 //! the SIMD kernels against the eight scalar calls they replace: packet kernels (eight
 //! rays, one primitive) and leaf kernels (one ray, a pack of eight primitives).
 
+use std::cell::OnceCell;
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
 use p3trace::intersect::{
-    self, BoxPack8, BoxRay, BoxRays, SpherePack8, SphereRoots, TrianglePack8,
+    self, BoxPack8, BoxRay, BoxRays, IntersectOptions, PacketQuery, SpherePack8, SphereRoots,
+    TrianglePack8,
 };
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::simd::{F32xP, LaneBits, PACKET};
@@ -23,9 +25,11 @@ fn routines(c: &mut Criterion) {
             b.iter(|| {
                 intersect::triangle(
                     black_box(&ray),
-                    Vec3::new(-1., -1., 0.),
-                    Vec3::new(2., 0., 0.),
-                    Vec3::new(0., 2., 0.),
+                    [
+                        Vec3::new(-1., -1., 0.),
+                        Vec3::new(1., -1., 0.),
+                        Vec3::new(-1., 1., 0.),
+                    ],
                     0.0,
                     f32::INFINITY,
                 )
@@ -80,11 +84,13 @@ fn packets(c: &mut Criterion) {
     let packet = RayPacket::new(&rays);
     let (lo, hi) = (F32xP::ZERO, F32xP::splat(f32::INFINITY));
     let all = LaneBits::MAX;
-    let (p0, e1, e2) = (
+    let shear = OnceCell::new();
+    let query = PacketQuery::new(&packet, IntersectOptions::default(), &shear);
+    let triangle = [
         Vec3::new(-1., -1., 0.),
-        Vec3::new(2., 0., 0.),
-        Vec3::new(0., 2., 0.),
-    );
+        Vec3::new(1., -1., 0.),
+        Vec3::new(-1., 1., 0.),
+    ];
     let (bmin, bmax) = (Vec3::splat(-1.0), Vec3::ONE);
 
     c.bench_function("packet/sphere/simd", |b| {
@@ -106,10 +112,10 @@ fn packets(c: &mut Criterion) {
         })
     });
     c.bench_function("packet/triangle/simd", |b| {
-        b.iter(|| intersect::triangle_packet(black_box(&packet), p0, e1, e2, lo, hi, all))
+        b.iter(|| intersect::triangle_packet(black_box(&query), triangle, lo, hi, all))
     });
     c.bench_function("packet/triangle/scalar", |b| {
-        b.iter(|| black_box(&rays).map(|r| intersect::triangle(&r, p0, e1, e2, 0.0, f32::INFINITY)))
+        b.iter(|| black_box(&rays).map(|r| intersect::triangle(&r, triangle, 0.0, f32::INFINITY)))
     });
     let box_rays = BoxRays::new(&packet);
     c.bench_function("packet/box interval/simd", |b| {
@@ -131,11 +137,8 @@ fn leaves(c: &mut Criterion) {
     let triangles: Vec<[Vec3; 3]> = (0..8)
         .map(|i| {
             let x = 0.5 * i as f32 - 2.0;
-            [
-                Vec3::new(x, -1.0, i as f32),
-                Vec3::new(1.0, 0.0, 0.0),
-                Vec3::new(0.0, 2.0, 0.0),
-            ]
+            let p0 = Vec3::new(x, -1.0, i as f32);
+            [p0, p0 + Vec3::X, p0 + 2.0 * Vec3::Y]
         })
         .collect();
     let boxes: Vec<(Vec3, Vec3)> = spheres
@@ -177,7 +180,7 @@ fn leaves(c: &mut Criterion) {
             let ray = black_box(&ray);
             triangles
                 .iter()
-                .map(|&[p0, e1, e2]| intersect::triangle(ray, p0, e1, e2, 0.0, inf))
+                .map(|&triangle| intersect::triangle(ray, triangle, 0.0, inf))
                 .fold(inf, |best, h| h.map_or(best, |h| h.t.min(best)))
         })
     });

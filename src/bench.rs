@@ -212,8 +212,8 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
                 (p - s.centre_at(i, 0.0).as_dvec3()) / s.radius[i] as f64
             }
             PrimKind::Triangle => {
-                let t = &g.triangles.records[i];
-                t.e1.cross(t.e2).as_dvec3().normalize()
+                let [e1, e2] = g.triangles.records[i].edges();
+                e1.cross(e2).as_dvec3().normalize()
             }
             _ => g
                 .normal(hit.prim, p.as_vec3(), hit.u, hit.v, 0.0)

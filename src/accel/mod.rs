@@ -29,6 +29,7 @@ mod stack;
 pub mod stream;
 mod structure;
 
+use std::cell::OnceCell;
 use std::time::{Duration, Instant};
 
 use crate::intersect::{
@@ -521,10 +522,8 @@ impl<'s> Tracer<'s> {
         let mut traceable = None;
         let packet = packet.asking(active, &mut traceable);
         let mut closest = packet.t_max.map(ClosestHit::new);
-        let query = PacketQuery {
-            packet,
-            options: self.options,
-        };
+        let shear = OnceCell::new();
+        let query = PacketQuery::new(packet, self.options, &shear);
         self.accel
             .closest_packet::<C>(self.geometry, &query, &mut closest, count);
         let bounded = closest.map(|c| c.hit());
@@ -554,14 +553,15 @@ impl<'s> Tracer<'s> {
         let active = packet.active & packet.traceable();
         let options = self.options;
         let by_plane = if self.has_unbounded() {
-            let query = PacketQuery { packet, options };
-            self.blocking_planes(&query, active, count)
+            let shear = OnceCell::new();
+            self.blocking_planes(&PacketQuery::new(packet, options, &shear), active, count)
         } else {
             0
         };
         let mut rest = None;
         let packet = packet.asking(active & !by_plane, &mut rest);
-        let query = PacketQuery { packet, options };
+        let shear = OnceCell::new();
+        let query = PacketQuery::new(packet, options, &shear);
         by_plane
             | self
                 .accel

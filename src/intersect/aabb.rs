@@ -198,7 +198,7 @@ impl LeafPack for Boxes {
     }
 
     #[inline]
-    fn leaf(pack: &BoxPack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
+    fn leaf<const FRAME: usize>(pack: &BoxPack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
         let (ray, inv_dir) = (&query.ray, query.inv_dir);
         TriangleHit8::at(aabb_leaf(ray, inv_dir, pack, query.t_min, t_max))
     }

@@ -24,6 +24,29 @@
 //! bit for bit (`tests/integration/simd.rs`). They return a hit mask and `t` lanes; the
 //! `t` of a lane that misses is unspecified, and lanes outside `active` always miss.
 
+/// `$body` with `$frame` (a ray's frame, [`frame_of`]: 0, 1 or 2) as the constant
+/// `$name`, which the walks and leaf tests take as a generic parameter: one branch here
+/// rather than one per leaf.
+macro_rules! with_frame {
+    ($frame:expr, $name:ident => $body:expr) => {
+        match $frame {
+            0 => {
+                const $name: usize = 0;
+                $body
+            }
+            1 => {
+                const $name: usize = 1;
+                $body
+            }
+            _ => {
+                const $name: usize = 2;
+                $body
+            }
+        }
+    };
+}
+pub(crate) use with_frame;
+
 mod aabb;
 mod bounds;
 mod cone;
@@ -47,12 +70,14 @@ pub use sphere::{
     MIN_RADIUS,
 };
 pub use triangle::{
-    triangle, triangle_leaf, triangle_packet, Triangle, TriangleHit, TriangleHit8, TriangleHits,
-    TrianglePack8, Triangles,
+    frame_of, triangle, triangle_leaf, triangle_packet, Axis, Shear, ShearLanes, Triangle,
+    TriangleHit, TriangleHit8, TriangleHits, TrianglePack8, Triangles,
 };
 
 /// A packet's lanes of [`TriangleHit`], as its kernels give them.
 pub type PacketHits = TriangleHits<F32xP>;
+
+use std::cell::OnceCell;
 
 use glam::Vec3;
 
@@ -148,8 +173,13 @@ pub trait LeafPack: Shapes {
     /// The primitives `indices` (one to eight) as a pack.
     fn pack(&self, indices: impl Iterator<Item = usize>) -> Self::Pack;
 
-    /// One ray against the eight slots of `pack`, within `(query.t_min, t_max)`.
-    fn leaf(pack: &Self::Pack, query: &RayQuery, t_max: f32) -> TriangleHit8;
+    /// Whether [`LeafPack::leaf`]'s answer depends on `FRAME`.
+    const FRAMED: bool = false;
+
+    /// One ray against the eight slots of `pack`, within `(query.t_min, t_max)`. `FRAME`
+    /// is the ray's frame ([`frame_of`]), which the triangle test specialises on and the
+    /// other kinds ignore: a walk takes it once (`with_frame!`).
+    fn leaf<const FRAME: usize>(pack: &Self::Pack, query: &RayQuery, t_max: f32) -> TriangleHit8;
 
     /// The primitive in slot `slot` of `pack` against the lanes `active` of `query`'s
     /// packet, as [`Shapes::intersect_packet`] tests a primitive of the storage.
@@ -201,14 +231,40 @@ impl RayQuery {
 }
 
 /// [`RayQuery`] for a packet's rays: a packet (its lanes' `1 / dir`, the start of their
-/// interval) and what the profile chose.
+/// interval), the triangle test's setup of its lanes, made by the first triangle test
+/// that needs it ([`PacketQuery::shear`]), and what the profile chose. A few words, passed
+/// and copied freely: the setup, hundreds of bytes, lies in its maker's frame.
 #[derive(Clone, Copy, Debug)]
 pub struct PacketQuery<'p> {
     pub packet: &'p RayPacket<'p>,
+    shear: &'p OnceCell<ShearLanes>,
     pub options: IntersectOptions,
 }
 
-impl PacketQuery<'_> {
+impl<'p> PacketQuery<'p> {
+    /// The query of the lanes `packet` asks, its triangle setup to be made in `shear` (an
+    /// empty cell of the caller's, as [`RayPacket::asking`] makes its copy).
+    #[inline]
+    pub fn new(
+        packet: &'p RayPacket<'p>,
+        options: IntersectOptions,
+        shear: &'p OnceCell<ShearLanes>,
+    ) -> Self {
+        PacketQuery {
+            packet,
+            shear,
+            options,
+        }
+    }
+
+    /// The triangle test's setup of the lanes, made at the first call: a packet that
+    /// meets no triangle (a scene of spheres, a packet whose lanes go on alone) never
+    /// makes it.
+    #[inline(always)]
+    pub fn shear(&self) -> &ShearLanes {
+        self.shear.get_or_init(|| ShearLanes::new(self.packet))
+    }
+
     /// Lane `k`'s ray as a query of its own: the same `1 / dir`, bit for bit, as
     /// [`RayQuery::new`] makes.
     #[inline]

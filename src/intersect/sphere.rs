@@ -305,7 +305,7 @@ impl LeafPack for Spheres {
 
     /// The kernel's hits that lie in their sphere's trusted box (as [`Shapes::intersect`]).
     #[inline(always)]
-    fn leaf(pack: &SpherePack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
+    fn leaf<const FRAME: usize>(pack: &SpherePack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
         let roots = query.options.sphere_roots;
         let (hit, t) = sphere_leaf(&query.ray, pack, roots, query.t_min, t_max);
         if hit.none() {

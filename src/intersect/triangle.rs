@@ -1,26 +1,51 @@
-//! The triangle kind: its storage ([`Triangles`]: a vertex and two edges, optional vertex
-//! normals), Möller-Trumbore and its SIMD twins (a packet's rays against one triangle; one
+//! The triangle kind: its storage ([`Triangles`]: three vertices, optional vertex normals),
+//! the watertight ray-triangle test of Woop, Benthin and Wald ("Watertight Ray/Triangle
+//! Intersection", JCGT 2013) and its SIMD twins (a packet's rays against one triangle; one
 //! ray against a [`TrianglePack8`] of a BVH leaf).
+//!
+//! **Watertight.** A ray is set up for the test ([`Shear`]): the axis its direction is
+//! longest along becomes `z`, the other two follow it cyclically, and a shear of `x` and
+//! `y` along `z` turns the ray into the `z` axis. Each vertex, relative
+//! to the origin and sheared, becomes a point of the plane `z = 0` that depends on the
+//! vertex and the ray alone; an edge's function is the 2-by-2 determinant of its two ends
+//! ([`edge`]), and reversing the edge negates it exactly (products commute and rounding
+//! to nearest is symmetric). So two triangles that share an edge decide it alike, and a ray
+//! passes on one side of it, the other, or on it, never between. A rounded difference of
+//! two rounded products has the sign of the exact difference or is zero (rounding is
+//! monotone), and a zero is computed again in double precision, where those products are
+//! exact ([`exact_edges`]): every edge function has the exact sign for the sheared
+//! vertices, as if they had been moved a little, each one the same way in every triangle
+//! it belongs to. A ray that enters a closed mesh therefore meets one of its triangles, and
+//! a ray through an edge or a vertex meets every triangle that shares it (zero counts as
+//! inside). The vertices must be the stored ones, which is why [`Triangles`] keeps three
+//! vertices and not a vertex and two edges: `p0 + (p1 - p0)` is not always `p1`.
+//!
+//! **Setup.** The walks of the 8-wide BVH take their ray's frame ([`frame_of`]) once, as a
+//! constant (`FRAME`, by `with_frame!`: at a walk's start, and for a packet's lanes group
+//! by group), so that a leaf pack's test reads the vertices on the frame's axes at fixed
+//! places and makes no choice: choosing in each leaf, by a branch or by coordinates read
+//! at computed places, cost the packet walks 7-19% (they test leaves for one lane after
+//! another). A pack's eight triangles share one setup of the ray ([`Shear`]), made there
+//! from its query; a packet's lanes share one ([`ShearLanes`]), made by its query at the
+//! first triangle it meets. The scalar test, one triangle at a time (the grid, the binary
+//! BVH, brute force), makes it for each.
 //!
 //! **Precision.** A hit stands only inside the triangle's trusted box (the box the
 //! structures hold it in, `intersect::trusted_box`), by the structures' own box test
-//! ([`RayQuery::holds`]): then every structure finds it (`accel::bounds`). Single-precision
-//! Möller-Trumbore's hit almost always lies there. It fails in two ways: a sliver's
-//! determinant (edges parallel to within rounding) is noise, so `u`, `v` and `t` are too
-//! (a hit 0.09 off the plane); and from 1e9 away `t` keeps only the digits that
-//! `e2 . ((o - p0) x e1)` leaves (15,200 short of the plane). Such a hit is computed again
-//! in double precision from the same inputs ([`refined`]) and stands if that one lies in
-//! the box. The products of single-precision numbers are exact in double precision, so
-//! the determinant, `u`, `v` and `t` are those of the triangle as stored, to a few
-//! roundings of doubles. Whether a hit is recomputed depends on the ray and the triangle
-//! alone, never on `t_max`, so the answer does not depend on the order a structure tests
-//! primitives in. The box test runs eight lanes at a time on the packs that single
-//! precision hits, against boxes each pack keeps (made once: making them at each such
-//! test cost 5% of the protocol's traversal instructions), and the recomputation in scalar
-//! code shared by every twin, so each lane stays the scalar answer bit for bit. A watertight test (Woop, Benthin and Wald
-//! 2013) would also close the cracks along shared edges, but wants the three vertices
-//! stored and its shear per ray, and from 1e9 away its `t` loses the same digits; cracks
-//! are not what the findings are, and the storage stays Möller-Trumbore's.
+//! ([`RayQuery::holds`]): then every structure finds it (`accel::bounds`). The watertight
+//! test's `t` is a weighted mean of the vertices' distances with weights of one sign, so no
+//! sliver makes it noise, and its hit lies in the box but for a ray from very far away
+//! (from 1e9, where floats are 64 apart, the vertices relative to the origin keep only
+//! those digits). Such a hit is computed again by the same test in double precision from
+//! the same inputs ([`refined`]) and stands if that one lies in the box. Whether a hit is
+//! recomputed depends on the ray and the triangle alone, never on `t_max`, so the answer
+//! does not depend on the order a structure tests primitives in. The box test runs eight
+//! lanes at a time on the packs that single precision hits, against boxes each pack keeps
+//! (made once: making them at each such test cost 5% of the protocol's traversal
+//! instructions), and the recomputations in scalar code shared by every twin, so each lane
+//! stays the scalar answer bit for bit.
+
+use std::ops::{Mul, Sub};
 
 use glam::Vec3;
 
@@ -50,148 +75,458 @@ impl TriangleHit {
     }
 }
 
-/// Möller-Trumbore test against the triangle `p0, p0 + e1, p0 + e2`. Two-sided; edges and
-/// vertices count as inside. A triangle with zero edges (how the scene stores degenerate
-/// ones) has a zero determinant and is never hit. A hit lies in the triangle's box as the
-/// structures hold it, single precision's where it does, else double precision's (the
-/// module's comment).
-pub fn triangle(
-    ray: &Ray,
-    p0: Vec3,
-    e1: Vec3,
-    e2: Vec3,
-    t_min: f32,
-    t_max: f32,
-) -> Option<TriangleHit> {
-    let query = || RayQuery::new(ray, t_min, IntersectOptions::default());
-    triangle_hit(ray, [p0, e1, e2], t_min, t_max, query)
+/// An axis of space, as a ray's frame ([`Shear`]) takes them: an index that needs no
+/// bounds check.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Axis {
+    X,
+    Y,
+    Z,
 }
 
-/// The body of [`triangle`], with `query` giving the ray's query for the box test, made
-/// only for a candidate (a caller with one at hand passes it). Out of line, as
-/// [`triangle`] was: inlined, it grows `Geometry::intersect` for every kind (+0.4% on
-/// `bench balls_high`).
+/// The frames a ray may take, by the axis its direction is longest along: that axis is the
+/// frame's `z`, and the next two, cyclically, its `x` and `y`.
+const FRAMES: [[Axis; 3]; 3] = [
+    [Axis::Y, Axis::Z, Axis::X],
+    [Axis::Z, Axis::X, Axis::Y],
+    [Axis::X, Axis::Y, Axis::Z],
+];
+
+/// `v` on the axes of `frame`.
+#[inline(always)]
+fn on_axes(v: Vec3, [x, y, z]: [Axis; 3]) -> Vec3 {
+    let v = v.to_array();
+    Vec3::new(v[x as usize], v[y as usize], v[z as usize])
+}
+
+/// The frame a ray with direction `dir` takes in the watertight test: the axis its
+/// direction is longest along (0, 1, 2: `x`, `y`, `z`), ties to the later axis (NaN: `z`),
+/// which becomes the frame's `z`. The walks take it as a constant (`FRAME`), so that a
+/// leaf's test reads the vertices on the frame's axes at fixed places.
+#[inline(always)]
+pub fn frame_of(dir: Vec3) -> usize {
+    let (x, y, z) = (dir.x.abs(), dir.y.abs(), dir.z.abs());
+    let x_over_y = x > y;
+    let by_x = x_over_y & (x > z);
+    let by_y = !x_over_y & (y > z);
+    2 - 2 * usize::from(by_x) - usize::from(by_y)
+}
+
+/// One ray set up for the watertight test: its frame's axes (`z` the one its direction is
+/// longest along), its origin on them, and the shear `(sx, sy, sz)`, which takes a point
+/// `p` relative to the origin on those axes to `(p.x - sx p.z, p.y - sy p.z)` in the plane
+/// across the ray, at distance `p.z sz` along it. Made from the query where a test needs
+/// it (the module's comment).
+#[derive(Clone, Copy, Debug)]
+pub struct Shear {
+    axes: [Axis; 3],
+    origin: Vec3,
+    factors: Vec3,
+}
+
+impl Shear {
+    /// The setup of `query`'s ray: its numbers read where they lie, by the axes' indices.
+    #[inline(always)]
+    pub fn of(query: &RayQuery) -> Self {
+        Self::on(query, FRAMES[frame_of(query.ray.dir)])
+    }
+
+    /// The setup of `query`'s ray on the frame `axes`: with the axes constants (a walk's
+    /// `FRAME`), its numbers and a pack's coordinates are read at fixed places.
+    #[inline(always)]
+    fn on(query: &RayQuery, axes: [Axis; 3]) -> Self {
+        let [x, y, z] = [axes[0] as usize, axes[1] as usize, axes[2] as usize];
+        let (o, d): (&[f32; 3], &[f32; 3]) = (query.ray.origin.as_ref(), query.ray.dir.as_ref());
+        let sz = query.inv_dir.as_ref()[z];
+        Shear {
+            axes,
+            origin: Vec3::new(o[x], o[y], o[z]),
+            factors: Vec3::new(d[x] * sz, d[y] * sz, sz),
+        }
+    }
+
+    /// The frame's axes.
+    pub fn axes(&self) -> [Axis; 3] {
+        self.axes
+    }
+
+    /// The origin on the frame's axes, then the shear `(sx, sy, sz)`.
+    pub fn parts(&self) -> [Vec3; 2] {
+        [self.origin, self.factors]
+    }
+
+    /// `p` relative to the origin, on the frame's axes.
+    #[inline(always)]
+    fn relative(&self, p: Vec3) -> Vec3 {
+        on_axes(p, self.axes) - self.origin
+    }
+
+    /// [`Shear::relative`] for eight points given per axis (`[x, y, z]`), read by the
+    /// frame's axes.
+    #[inline(always)]
+    fn relative8(&self, p: &[F32x8; 3]) -> Vec3x8 {
+        let [x, y, z] = self.axes;
+        let o = self.origin;
+        Vec3x8 {
+            x: p[x as usize] - F32x8::splat(o.x),
+            y: p[y as usize] - F32x8::splat(o.y),
+            z: p[z as usize] - F32x8::splat(o.z),
+        }
+    }
+
+    /// The shear's factors in every lane.
+    #[inline(always)]
+    fn factors8(&self) -> [F32x8; 3] {
+        let f = self.factors;
+        [F32x8::splat(f.x), F32x8::splat(f.y), F32x8::splat(f.z)]
+    }
+}
+
+/// [`Shear`] for each lane of a packet, made once per packet query
+/// ([`PacketQuery::shear`]): each lane's frame, as masks, and the frame that every lane
+/// the packet asks shares, if they do (most packets: a tile's primary rays, one light's
+/// shadow rays), so that a triangle's vertices are taken on its axes by three broadcasts
+/// rather than six blends per vertex.
+#[derive(Clone, Copy, Debug)]
+pub struct ShearLanes {
+    /// The lanes whose frame's `z` is `x`, and those whose `z` is `y` (the others: `z`).
+    z_is_x: MaskP,
+    z_is_y: MaskP,
+    /// The `z` of the frame the lanes share, if they do.
+    shared: Option<Axis>,
+    origin: Vec3xP,
+    factors: [F32xP; 3],
+}
+
+impl ShearLanes {
+    /// The setup of the packet's rays, lane by lane [`Shear::of`] the lane's query. Out of
+    /// line: a packet query makes it once, and inlined it grew every packet walk.
+    #[inline(never)]
+    pub fn new(packet: &RayPacket) -> Self {
+        let d = packet.dir.abs();
+        let x_over_y = d.x.gt(d.y);
+        let z_is_x = x_over_y & d.x.gt(d.z);
+        let z_is_y = d.y.gt(d.z).and_not(x_over_y);
+        let asked = packet.active;
+        let (by_x, by_y) = (z_is_x.bitmask(), z_is_y.bitmask());
+        let shared = if by_x & asked == asked {
+            Some(Axis::X)
+        } else if by_y & asked == asked {
+            Some(Axis::Y)
+        } else if (by_x | by_y) & asked == 0 {
+            Some(Axis::Z)
+        } else {
+            None
+        };
+        // Each lane's vectors on its frame's axes: where the lanes share one, its fields
+        // in turn, else a blend of the three.
+        let on_axes = |v: &Vec3xP| match shared {
+            Some(Axis::X) => Vec3xP {
+                x: v.y,
+                y: v.z,
+                z: v.x,
+            },
+            Some(Axis::Y) => Vec3xP {
+                x: v.z,
+                y: v.x,
+                z: v.y,
+            },
+            Some(Axis::Z) => *v,
+            None => {
+                let pick = |x: F32xP, y: F32xP, z: F32xP| z_is_x.select(x, z_is_y.select(y, z));
+                Vec3xP {
+                    x: pick(v.y, v.z, v.x),
+                    y: pick(v.z, v.x, v.y),
+                    z: pick(v.x, v.y, v.z),
+                }
+            }
+        };
+        let dir = on_axes(&packet.dir);
+        let sz = on_axes(&packet.inv_dir).z;
+        ShearLanes {
+            z_is_x,
+            z_is_y,
+            shared,
+            origin: on_axes(&packet.origin),
+            factors: [dir.x * sz, dir.y * sz, sz],
+        }
+    }
+
+    /// The packet's lanes by their frame ([`frame_of`]): `[x, y, z]`.
+    #[inline(always)]
+    pub fn lanes_by_frame(&self) -> [LaneBits; 3] {
+        let (x, y) = (self.z_is_x.bitmask(), self.z_is_y.bitmask());
+        [x, y, !(x | y)]
+    }
+
+    /// Lane `k`, one the packet asks, as a [`Shear`]: bit for bit [`Shear::of`] the lane's
+    /// query.
+    pub fn lane(&self, k: usize) -> Shear {
+        let [sx, sy, sz] = &self.factors;
+        let (x, y) = (self.z_is_x.bitmask().has(k), self.z_is_y.bitmask().has(k));
+        Shear {
+            axes: FRAMES[if x {
+                0
+            } else if y {
+                1
+            } else {
+                2
+            }],
+            origin: self.origin.lane(k),
+            factors: Vec3::new(sx.lane(k), sy.lane(k), sz.lane(k)),
+        }
+    }
+
+    /// [`Shear::relative`] for each lane of the point whose coordinate on `axis` is
+    /// `coordinate(axis)`. Right for the lanes of the packet it was made for (their frame
+    /// is `shared` where that is set). The shared frame's axes are written out, one arm
+    /// each, so that the coordinates' addresses wait for no load of the axes (a packet's
+    /// test of one triangle, timed alone: 12.9 ns with the axes loaded, 10.5 written out).
+    #[inline(always)]
+    fn relative(&self, coordinate: impl Fn(usize) -> f32) -> Vec3xP {
+        let splat = |axis: usize| F32xP::splat(coordinate(axis));
+        let on_axes = match self.shared {
+            Some(Axis::X) => Vec3xP {
+                x: splat(1),
+                y: splat(2),
+                z: splat(0),
+            },
+            Some(Axis::Y) => Vec3xP {
+                x: splat(2),
+                y: splat(0),
+                z: splat(1),
+            },
+            Some(Axis::Z) => Vec3xP {
+                x: splat(0),
+                y: splat(1),
+                z: splat(2),
+            },
+            None => {
+                let (x, y, z) = (splat(0), splat(1), splat(2));
+                let pick =
+                    |x: F32xP, y: F32xP, z: F32xP| self.z_is_x.select(x, self.z_is_y.select(y, z));
+                Vec3xP {
+                    x: pick(y, z, x),
+                    y: pick(z, x, y),
+                    z: pick(x, y, z),
+                }
+            }
+        };
+        on_axes - self.origin
+    }
+}
+
+/// The edge function of the edge from `p` to `q` (sheared, the ray through the origin):
+/// twice the signed area of the triangle `(0, p, q)`. `edge(q, p)` is exactly `-edge(p,
+/// q)`.
+#[inline(always)]
+fn edge<F: Copy + Mul<Output = F> + Sub<Output = F>>([px, py]: [F; 2], [qx, qy]: [F; 2]) -> F {
+    qx * py - qy * px
+}
+
+/// [`edge`] of the three edges of `a, b, c` in double precision, where the products of
+/// single-precision numbers are exact: the exact sign of each, for an edge function that
+/// single precision rounded to zero.
+#[cold]
 #[inline(never)]
-fn triangle_hit(
-    ray: &Ray,
-    [p0, e1, e2]: [Vec3; 3],
-    t_min: f32,
-    t_max: f32,
-    query: impl Fn() -> RayQuery,
-) -> Option<TriangleHit> {
-    let p = ray.dir.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 || !det.is_finite() {
+fn exact_edges([a, b, c]: [[f32; 2]; 3]) -> [f32; 3] {
+    let edge = |p: [f32; 2], q: [f32; 2]| {
+        let [px, py, qx, qy] = [p[0], p[1], q[0], q[1]].map(f64::from);
+        (qx * py - qy * px) as f32
+    };
+    [edge(b, c), edge(c, a), edge(a, b)]
+}
+
+/// Whether edge functions of both signs rule the ray out.
+#[inline(always)]
+fn straddles([u, v, w]: [f32; 3]) -> bool {
+    (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)
+}
+
+/// The watertight test against the triangle `vertices` for the ray set up as `shear`:
+/// the hit in `(t_min, inf)`, before the trusted box and `t_max` settle it.
+#[inline(always)]
+fn watertight(shear: &Shear, vertices: [Vec3; 3], t_min: f32) -> Option<TriangleHit> {
+    let [p0, p1, p2] = vertices;
+    let (a, b, c) = (shear.relative(p0), shear.relative(p1), shear.relative(p2));
+    let Vec3 {
+        x: sx,
+        y: sy,
+        z: sz,
+    } = shear.factors;
+    // The vertices sheared into the plane across the ray, which passes through (0, 0).
+    let sheared = |p: Vec3| [p.x - sx * p.z, p.y - sy * p.z];
+    let sheared = [sheared(a), sheared(b), sheared(c)];
+    let [a2, b2, c2] = sheared;
+    let edges = [edge(b2, c2), edge(c2, a2), edge(a2, b2)];
+    if straddles(edges) {
+        return None;
+    }
+    let edges = if edges.contains(&0.0) {
+        exact_edges(sheared)
+    } else {
+        edges
+    };
+    hit_of(edges, [a.z, b.z, c.z], sz, t_min)
+}
+
+/// The hit of a ray whose edge functions are `edges` and whose frame's `z` puts the
+/// vertices at `depths`, in `(t_min, inf)`: none where the edge functions straddle zero
+/// or the determinant, their sum, is zero or not finite.
+#[inline(always)]
+fn hit_of(edges: [f32; 3], depths: [f32; 3], sz: f32, t_min: f32) -> Option<TriangleHit> {
+    let [u, v, w] = edges;
+    let det = u + v + w;
+    if straddles(edges) || det == 0.0 || !det.is_finite() {
         return None;
     }
     let inv_det = 1.0 / det;
-    let s = ray.origin - p0;
-    let u = s.dot(p) * inv_det;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let v = ray.dir.dot(q) * inv_det;
-    if !(v >= 0.0 && u + v <= 1.0) {
-        return None;
-    }
-    let t = e2.dot(q) * inv_det;
-    if !(t > t_min) {
-        return None;
-    }
-    let query = query();
-    if in_trusted_box(&query, [p0, e1, e2], t) {
-        return (t < t_max).then_some(TriangleHit { t, u, v });
-    }
-    refined(ray, p0, e1, e2, t_min, t_max).filter(|hit| in_trusted_box(&query, [p0, e1, e2], hit.t))
-}
-
-/// The box of the corners of `p0, e1, e2`, as [`Triangles`] bounds it for the structures;
-/// `None` unless the corners are finite.
-#[inline]
-fn corner_box([p0, e1, e2]: [Vec3; 3]) -> Option<Aabb> {
-    let (a, b) = (p0 + e1, p0 + e2);
-    (p0.is_finite() && a.is_finite() && b.is_finite()).then(|| Aabb {
-        min: p0.min(a).min(b),
-        max: p0.max(a).max(b),
+    let t = (u * depths[0] + v * depths[1] + w * depths[2]) * sz * inv_det;
+    (t > t_min).then_some(TriangleHit {
+        t,
+        u: v * inv_det,
+        v: w * inv_det,
     })
 }
 
-/// The box the structures hold the triangle `p0, e1, e2` in ([`trusted_box`]).
-#[inline]
-fn trusted_triangle_box(triangle: [Vec3; 3]) -> Option<Aabb> {
-    corner_box(triangle).and_then(|tight| trusted_box(tight, 0.0))
+/// [`watertight`] lane by lane, on the vertices relative to each lane's origin on its
+/// frame's axes (`vertices`) with each lane's shear (`factors`); lanes outside `asked`
+/// miss. Its early exits turned into a mask: the candidates that [`settle`] settles, and
+/// the lanes where an edge function is zero, which it leaves to the scalar test.
+#[inline(always)]
+fn watertight_lanes<F: Floats>(
+    [a, b, c]: [Vec3Lanes<F>; 3],
+    [sx, sy, sz]: [F; 3],
+    t_min: F,
+    asked: F::Mask,
+) -> (TriangleHits<F>, F::Mask) {
+    let sheared = |p: Vec3Lanes<F>| [p.x - sx * p.z, p.y - sy * p.z];
+    let (a2, b2, c2) = (sheared(a), sheared(b), sheared(c));
+    let [u, v, w] = [edge(b2, c2), edge(c2, a2), edge(a2, b2)];
+    let zero = F::splat(0.0);
+    // [`straddles`] by the least and the largest: `minps` and `maxps` keep the second
+    // operand against NaN, so a NaN lane may fall either way here, and its determinant
+    // then rules it out (or the scalar test, which the lane goes to).
+    let (least, largest) = (u.min(v).min(w), u.max(v).max(w));
+    let inside = asked.and_not(least.lt(zero) & largest.gt(zero));
+    let exact = inside & (least.eq(zero) | largest.eq(zero));
+    let det = u + v + w;
+    let inv_det = F::splat(1.0) / det;
+    let t = (u * a.z + v * b.z + w * c.z) * sz * inv_det;
+    // The edge functions of a lane inside and not exact are all of one sign and none zero,
+    // so the determinant is zero in none: finite is what is left to ask.
+    let hits = TriangleHits {
+        hit: inside.and_not(exact) & (det.is_finite() & t.gt(t_min)),
+        t,
+        u: v * inv_det,
+        v: w * inv_det,
+    };
+    (hits, exact)
 }
 
-/// Whether the hit at `t` of the triangle `p0, e1, e2` along `query` lies where the
+/// The watertight test against `vertices` for one ray within `(t_min, t_max)`. Two-sided;
+/// edges and vertices count as inside. NaN vertices (how [`Triangles`] stores a triangle
+/// of zero area) are never hit. A hit lies in the triangle's box as the structures hold
+/// it, single precision's where it does, else double precision's (the module's comment).
+pub fn triangle(ray: &Ray, vertices: [Vec3; 3], t_min: f32, t_max: f32) -> Option<TriangleHit> {
+    let query = RayQuery::new(ray, t_min, IntersectOptions::default());
+    triangle_hit(&query, vertices, t_max)
+}
+
+/// The body of [`triangle`] for a query. Out of line, as [`triangle`] was: inlined, it
+/// grows `Geometry::intersect` for every kind (+0.4% on `bench balls_high`).
+#[inline(never)]
+fn triangle_hit(query: &RayQuery, vertices: [Vec3; 3], t_max: f32) -> Option<TriangleHit> {
+    let hit = watertight(&Shear::of(query), vertices, query.t_min)?;
+    if in_trusted_box(query, vertices, hit.t) {
+        return (hit.t < t_max).then_some(hit);
+    }
+    refined(&query.ray, vertices, query.t_min, t_max)
+        .filter(|hit| in_trusted_box(query, vertices, hit.t))
+}
+
+/// The box of the vertices, as [`Triangles`] bounds the triangle for the structures;
+/// `None` unless they are finite.
+#[inline]
+fn corner_box([p0, p1, p2]: [Vec3; 3]) -> Option<Aabb> {
+    (p0.is_finite() && p1.is_finite() && p2.is_finite()).then(|| Aabb {
+        min: p0.min(p1).min(p2),
+        max: p0.max(p1).max(p2),
+    })
+}
+
+/// The box the structures hold the triangle `vertices` in ([`trusted_box`]).
+#[inline]
+fn trusted_triangle_box(vertices: [Vec3; 3]) -> Option<Aabb> {
+    corner_box(vertices).and_then(|tight| trusted_box(tight, 0.0))
+}
+
+/// Whether the hit at `t` of the triangle `vertices` along `query` lies where the
 /// structures look for it: in its trusted box, by their box test ([`RayQuery::holds`]).
 #[inline(never)]
-fn in_trusted_box(query: &RayQuery, triangle: [Vec3; 3], t: f32) -> bool {
-    query.holds(trusted_triangle_box(triangle), t)
+fn in_trusted_box(query: &RayQuery, vertices: [Vec3; 3], t: f32) -> bool {
+    query.holds(trusted_triangle_box(vertices), t)
 }
 
-/// Möller-Trumbore in double precision from the single-precision inputs: the hit of a
-/// candidate that the single-precision test found (see the module's comment).
+/// The watertight test in double precision from the single-precision inputs, in the frame
+/// single precision takes: the hit of a candidate that single precision found outside the
+/// box (see the module's comment). Zero counts as inside, as in single precision.
 #[inline(never)]
-fn refined(ray: &Ray, p0: Vec3, e1: Vec3, e2: Vec3, t_min: f32, t_max: f32) -> Option<TriangleHit> {
+fn refined(ray: &Ray, vertices: [Vec3; 3], t_min: f32, t_max: f32) -> Option<TriangleHit> {
+    let [x, y, z] = FRAMES[frame_of(ray.dir)].map(|axis| axis as usize);
     let (origin, dir) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
-    let (p0, e1, e2) = (p0.as_dvec3(), e1.as_dvec3(), e2.as_dvec3());
-    let p = dir.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 {
+    let sz = 1.0 / dir[z];
+    let (sx, sy) = (dir[x] * sz, dir[y] * sz);
+    let [a, b, c] = vertices.map(|p| {
+        let p = p.as_dvec3() - origin;
+        [p[x] - sx * p[z], p[y] - sy * p[z], p[z]]
+    });
+    let edge = |p: [f64; 3], q: [f64; 3]| q[0] * p[1] - q[1] * p[0];
+    let [u, v, w] = [edge(b, c), edge(c, a), edge(a, b)];
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
         return None;
     }
-    let s = origin - p0;
-    let u = s.dot(p) / det;
-    let q = s.cross(e1);
-    let v = dir.dot(q) / det;
-    if !(u >= 0.0 && v >= 0.0 && u + v <= 1.0) {
+    let det = u + v + w;
+    if det == 0.0 || !det.is_finite() {
         return None;
     }
-    let t = (e2.dot(q) / det) as f32;
-    let (u, v) = (u as f32, v as f32);
+    let t = ((u * a[2] + v * b[2] + w * c[2]) * sz / det) as f32;
+    let (u, v) = ((v / det) as f32, (w / det) as f32);
     (t > t_min && t < t_max).then_some(TriangleHit { t, u, v })
 }
 
-/// The candidates of `hits` (single precision's, `triangle_lanes`) settled as [`triangle`]
-/// settles them: the lanes of `trusted` (in the triangle's box) kept within `t_max`, the
-/// others computed again by [`refined`], lane `k` against the ray and the triangle that
-/// `lane(k)` gives.
+/// The candidates of `hits` (single precision's, [`watertight_lanes`]) settled as
+/// [`triangle`] settles them: the lanes of `trusted` (in the triangle's box) kept within
+/// `t_max`; the others, and the lanes `exact` (an edge function of zero), answered by
+/// `scalar(k)`, the scalar test of lane `k`.
 #[inline(always)]
 fn settle<F: Floats>(
     hits: &mut TriangleHits<F>,
     trusted: F::Mask,
-    lane: impl Fn(usize) -> (Ray, [Vec3; 3]),
-    t_min: F,
+    exact: F::Mask,
     t_max: F,
+    scalar: impl Fn(usize) -> Option<TriangleHit>,
 ) {
-    let doubtful = hits.hit.and_not(trusted).bitmask();
+    let others = (hits.hit.and_not(trusted) | exact).bitmask();
     hits.hit = hits.hit & trusted & hits.t.lt(t_max);
-    if doubtful != Bits::EMPTY {
-        refine_lanes(hits, doubtful, lane, t_min, t_max);
+    if others != Bits::EMPTY {
+        *hits = scalar_lanes(*hits, others, scalar);
     }
 }
 
-/// The lanes `doubtful` of `hits` as [`triangle`] computes them again.
+/// `hits` with the lanes `lanes` as `scalar` answers them. By value: a reference would
+/// keep the hits in memory on the way that does not call it.
 #[cold]
 #[inline(never)]
-fn refine_lanes<F: Floats>(
-    hits: &mut TriangleHits<F>,
-    doubtful: <F::Mask as LaneMask>::Bits,
-    lane: impl Fn(usize) -> (Ray, [Vec3; 3]),
-    t_min: F,
-    t_max: F,
-) {
+fn scalar_lanes<F: Floats>(
+    mut hits: TriangleHits<F>,
+    lanes: <F::Mask as LaneMask>::Bits,
+    scalar: impl Fn(usize) -> Option<TriangleHit>,
+) -> TriangleHits<F> {
     let mut mask = hits.hit.bitmask();
-    for_lanes(doubtful, |k| {
-        let (ray, triangle) = lane(k);
-        let [p0, e1, e2] = triangle;
-        let (t_min, t_max) = (t_min.lane(k), t_max.lane(k));
-        let hit = refined(&ray, p0, e1, e2, t_min, t_max).filter(|hit| {
-            let query = RayQuery::new(&ray, t_min, IntersectOptions::default());
-            in_trusted_box(&query, triangle, hit.t)
-        });
-        if let Some(hit) = hit {
+    for_lanes(lanes, |k| {
+        if let Some(hit) = scalar(k) {
             hits.t.set_lane(k, hit.t);
             hits.u.set_lane(k, hit.u);
             hits.v.set_lane(k, hit.v);
@@ -199,6 +534,7 @@ fn refine_lanes<F: Floats>(
         }
     });
     hits.hit = F::Mask::from_bitmask(mask);
+    hits
 }
 
 /// Lanes of [`TriangleHit`]: lane `i` hit when `hit` has it; `t`, `u` and `v` of a lane
@@ -241,52 +577,56 @@ impl PacketHits {
     }
 }
 
-/// Eight triangles side by side for [`triangle_leaf`], stored as the scene stores them
-/// (a vertex and two edges), with their trusted boxes. Unused slots have zero edges, as
-/// degenerate triangles do, so their determinant is 0 (or NaN for a NaN ray) and they
-/// are never hit.
+/// Eight triangles side by side for [`triangle_leaf`]: their vertices per axis, with
+/// their trusted boxes. Unused slots hold NaN vertices, as degenerate triangles do, so
+/// every edge function is NaN (never a zero that asks for double precision) and they are
+/// never hit.
 #[derive(Clone, Copy, Debug)]
 pub struct TrianglePack8 {
-    pub p0: Vec3x8,
-    pub e1: Vec3x8,
-    pub e2: Vec3x8,
+    /// `vertices[i][axis]`: coordinate `axis` of vertex `i` of each slot.
+    vertices: [[F32x8; 3]; 3],
     /// Each slot's [`trusted_triangle_box`], valid in the slots of `trusted_slots` that
-    /// single precision can hit (a slot with a NaN corner is none: a NaN or infinite
-    /// vertex or edge makes the determinant or `u` NaN).
+    /// single precision can hit (a slot with a NaN or infinite vertex is none: it makes an
+    /// edge function or the determinant NaN or infinite).
     trusted: BoxPack8,
     trusted_slots: u8,
 }
 
 impl TrianglePack8 {
-    /// Packs up to eight `[p0, e1, e2]` triangles, padding the rest with zeros.
+    /// Packs up to eight triangles (their vertices), padding the rest with NaN.
     ///
     /// # Panics
     /// If given more than eight triangles.
     pub fn new(triangles: &[[Vec3; 3]]) -> Self {
         assert!(triangles.len() <= 8, "a pack holds at most 8 triangles");
-        let field = |k: usize| {
-            Vec3x8::from_lanes(std::array::from_fn(|i| {
-                triangles.get(i).map_or(Vec3::ZERO, |tri| tri[k])
-            }))
-        };
-        let (p0, e1, e2) = (field(0), field(1), field(2));
-        let (a, b) = (p0 + e1, p0 + e2);
+        let vertices = [0, 1, 2].map(|i| {
+            [0, 1, 2].map(|axis| {
+                F32x8::from_fn(|slot| triangles.get(slot).map_or(f32::NAN, |t| t[i][axis]))
+            })
+        });
+        let [p0, p1, p2] = vertices.map(|[x, y, z]| Vec3x8 { x, y, z });
         let tight = BoxPack8 {
-            min: p0.min(a).min(b),
-            max: p0.max(a).max(b),
+            min: p0.min(p1).min(p2),
+            max: p0.max(p1).max(p2),
         };
         let (trusted, trusted_slots) = tight.trusted(0.0);
         TrianglePack8 {
-            p0,
-            e1,
-            e2,
+            vertices,
             trusted,
             trusted_slots: trusted_slots.bitmask(),
         }
     }
 
+    /// The vertices of slot `slot`.
+    #[inline(always)]
+    fn slot(&self, slot: usize) -> [Vec3; 3] {
+        let vertex = |[x, y, z]: &[F32x8; 3]| Vec3::new(x.lane(slot), y.lane(slot), z.lane(slot));
+        let [p0, p1, p2] = &self.vertices;
+        [vertex(p0), vertex(p1), vertex(p2)]
+    }
+
     /// The trusted box of slot `slot`, bit for bit as [`trusted_triangle_box`] makes it
-    /// where its corners are not NaN.
+    /// where its vertices are finite.
     #[inline(always)]
     fn trusted_box(&self, slot: usize) -> Option<Aabb> {
         (self.trusted_slots & 1 << slot != 0).then(|| Aabb {
@@ -296,58 +636,57 @@ impl TrianglePack8 {
     }
 }
 
-/// [`triangle`] for a packet's rays against one triangle; lanes outside `active` miss.
+/// [`triangle`] for the rays of `query`'s packet against one triangle, each lane within
+/// `(t_min, t_max)`; lanes outside `active` (which the packet asks) miss.
 pub fn triangle_packet(
-    rays: &RayPacket,
-    p0: Vec3,
-    e1: Vec3,
-    e2: Vec3,
+    query: &PacketQuery,
+    vertices: [Vec3; 3],
     t_min: F32xP,
     t_max: F32xP,
     active: LaneBits,
 ) -> PacketHits {
-    let triangle = [p0, e1, e2];
     packet_hits(
-        rays,
-        triangle,
-        || trusted_triangle_box(triangle),
+        query,
+        |i, axis| vertices[i][axis],
+        || trusted_triangle_box(vertices),
         t_min,
         t_max,
         active,
     )
 }
 
-/// [`triangle_packet`] with the triangle's trusted box made by `trusted`, only for a
-/// packet with candidates.
+/// [`triangle_packet`] for the triangle whose vertex `i` has the coordinate
+/// `coordinate(i, axis)` on `axis`, its trusted box made by `trusted`, only for a packet
+/// with candidates. A coordinate is read where it lies, on the axes the lanes take: from
+/// a pack, one broadcast each.
 #[inline(always)]
 fn packet_hits(
-    rays: &RayPacket,
-    [p0, e1, e2]: [Vec3; 3],
+    query: &PacketQuery,
+    coordinate: impl Fn(usize, usize) -> f32,
     trusted: impl Fn() -> Option<Aabb>,
     t_min: F32xP,
     t_max: F32xP,
     active: LaneBits,
 ) -> PacketHits {
-    let mut hits = triangle_lanes(
-        rays.origin,
-        rays.dir,
-        Vec3xP::splat(p0),
-        Vec3xP::splat(e1),
-        Vec3xP::splat(e2),
+    let shear = query.shear();
+    let relative = |i: usize| shear.relative(|axis| coordinate(i, axis));
+    let (mut hits, exact) = watertight_lanes(
+        [relative(0), relative(1), relative(2)],
+        shear.factors,
         t_min,
+        MaskP::from_bitmask(active),
     );
-    hits.hit = hits.hit & MaskP::from_bitmask(active);
-    if hits.hit.any() {
+    if (hits.hit | exact).any() {
+        let rays = query.packet;
         let trusted = trusted().map_or(MaskP::from_bitmask(0), |b| {
             BoxRays::new(rays).holds(b.min, b.max, t_min, hits.t)
         });
-        settle(
-            &mut hits,
-            trusted,
-            |k| (rays.rays[k], [p0, e1, e2]),
-            t_min,
-            t_max,
-        );
+        let vertex = |i| Vec3::new(coordinate(i, 0), coordinate(i, 1), coordinate(i, 2));
+        let vertices = [vertex(0), vertex(1), vertex(2)];
+        settle(&mut hits, trusted, exact, t_max, |k| {
+            let lane = RayQuery::new(&rays.rays[k], t_min.lane(k), query.options);
+            triangle_hit(&lane, vertices, t_max.lane(k))
+        });
     }
     hits
 }
@@ -355,63 +694,68 @@ fn packet_hits(
 /// [`triangle`] for one ray against the eight triangles of a pack.
 pub fn triangle_leaf(ray: &Ray, pack: &TrianglePack8, t_min: f32, t_max: f32) -> TriangleHit8 {
     let query = RayQuery::new(ray, t_min, IntersectOptions::default());
-    leaf_hits(&query, pack, t_max)
+    with_frame!(frame_of(ray.dir), FRAME => leaf_hits::<FRAME>(&query, pack, t_max))
 }
 
-/// [`triangle_leaf`] for a query (its `1 / dir` computed once per ray).
+/// [`triangle_leaf`] for a query whose frame ([`frame_of`]) is `FRAME`: the frame's axes
+/// are constants, so the vertices' coordinates are read where they lie, waiting for no
+/// choice of frame, and the test makes no choice per leaf.
 #[inline(always)]
-fn leaf_hits(query: &RayQuery, pack: &TrianglePack8, t_max: f32) -> TriangleHit8 {
-    let ray = &query.ray;
+fn leaf_hits<const FRAME: usize>(
+    query: &RayQuery,
+    pack: &TrianglePack8,
+    t_max: f32,
+) -> TriangleHit8 {
+    let shear = &Shear::on(query, FRAMES[FRAME]);
     let (t_min, t_max) = (F32x8::splat(query.t_min), F32x8::splat(t_max));
-    let mut hits = triangle_lanes(
-        Vec3x8::splat(ray.origin),
-        Vec3x8::splat(ray.dir),
-        pack.p0,
-        pack.e1,
-        pack.e2,
+    let [p0, p1, p2] = &pack.vertices;
+    let (mut hits, exact) = watertight_lanes(
+        [
+            shear.relative8(p0),
+            shear.relative8(p1),
+            shear.relative8(p2),
+        ],
+        shear.factors8(),
         t_min,
+        Mask8::ALL,
     );
-    if hits.hit.any() {
+    if (hits.hit | exact).any() {
         let trusted = query.holds8(
             (pack.trusted, Mask8::from_bitmask(pack.trusted_slots)),
             hits.t,
         );
-        let triangle = |k| [pack.p0.lane(k), pack.e1.lane(k), pack.e2.lane(k)];
-        settle(&mut hits, trusted, |k| (*ray, triangle(k)), t_min, t_max);
+        let t_max_lane = t_max.lane(0);
+        settle(&mut hits, trusted, exact, t_max, |k| {
+            triangle_hit(query, pack.slot(k), t_max_lane)
+        });
     }
     hits
 }
 
-/// The single-precision body of [`triangle`], lane by lane, its early exits turned into
-/// a mask: the candidates that [`settle`] settles.
+/// How far a point of a triangle must be moved off its plane so that no ray leaving it
+/// there meets the triangle again by the watertight test ([`Shapes::surface_point`] of
+/// [`Triangles`]): `gamma(12) |a| |b| |c| / area + gamma(14) (w |a| + u |b| + v |c|)`,
+/// with `distances` the point's distances to the three vertices, `weights` its
+/// barycentrics and `area` the length of `e1 x e2` (the first term left out where that is
+/// not positive). [`self_hit_margin8`] is its twin for eight points.
 #[inline(always)]
-fn triangle_lanes<F: Floats>(
-    origin: Vec3Lanes<F>,
-    dir: Vec3Lanes<F>,
-    p0: Vec3Lanes<F>,
-    e1: Vec3Lanes<F>,
-    e2: Vec3Lanes<F>,
-    t_min: F,
-) -> TriangleHits<F> {
-    let (zero, one) = (F::splat(0.0), F::splat(1.0));
-    let p = dir.cross(e2);
-    let det = e1.dot(p);
-    let mut hit = det.is_finite().and_not(det.eq(zero));
-    let inv_det = one / det;
-    let s = origin - p0;
-    let u = s.dot(p) * inv_det;
-    hit = hit & zero.le(u) & u.le(one);
-    let q = s.cross(e1);
-    let v = dir.dot(q) * inv_det;
-    hit = hit & v.ge(zero) & (u + v).le(one);
-    let t = e2.dot(q) * inv_det;
-    hit = hit & t.gt(t_min);
-    TriangleHits { hit, t, u, v }
+fn self_hit_margin([a, b, c]: [f32; 3], [w, u, v]: [f32; 3], area: f32) -> f32 {
+    let spread = if area > 0.0 { a * b * c / area } else { 0.0 };
+    gamma(12) * spread + gamma(14) * (w.abs() * a + u.abs() * b + v.abs() * c)
 }
 
-/// Triangles stored as a vertex and two edges (what Möller-Trumbore reads), one
-/// [`Triangle`] record each. Degenerate triangles are stored with zero edges, which the
-/// test never hits.
+/// [`self_hit_margin`] lane by lane.
+#[inline(always)]
+fn self_hit_margin8([a, b, c]: [F32x8; 3], [w, u, v]: [F32x8; 3], area: F32x8) -> F32x8 {
+    let spread = area.gt(F32x8::ZERO).select(a * b * c / area, F32x8::ZERO);
+    F32x8::splat(gamma(12)) * spread
+        + F32x8::splat(gamma(14)) * (w.abs() * a + u.abs() * b + v.abs() * c)
+}
+
+/// Triangles stored as their three vertices (what the watertight test reads), one
+/// [`Triangle`] record each. Degenerate triangles (of zero area in single precision) are
+/// stored with NaN vertices, which the test never hits and the structures leave out (their
+/// box is empty).
 ///
 /// Records, not an array per coordinate: the SIMD tests read the leaf packs
 /// ([`TrianglePack8`], structure of arrays), so this storage is read one triangle at a
@@ -427,9 +771,7 @@ pub struct Triangles {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C)]
 pub struct Triangle {
-    pub p0: Vec3,
-    pub e1: Vec3,
-    pub e2: Vec3,
+    pub vertices: [Vec3; 3],
     pub material: u32,
     /// Index into `vertex_normals` for smooth (`pp`) triangles, [`Triangles::FLAT`]
     /// otherwise.
@@ -437,9 +779,11 @@ pub struct Triangle {
 }
 
 impl Triangle {
-    /// The vertex and the two edges.
-    pub fn vertex_and_edges(&self) -> [Vec3; 3] {
-        [self.p0, self.e1, self.e2]
+    /// The edges `p1 - p0` and `p2 - p0`.
+    #[inline(always)]
+    pub fn edges(&self) -> [Vec3; 2] {
+        let [p0, p1, p2] = self.vertices;
+        [p1 - p0, p2 - p0]
     }
 }
 
@@ -449,11 +793,7 @@ impl Triangles {
     pub fn push(&mut self, p: [Vec3; 3], normals: Option<[Vec3; 3]>, material: u32) {
         let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
         let degenerate = !(e1.cross(e2).length_squared() > 0.0);
-        let (e1, e2) = if degenerate {
-            (Vec3::ZERO, Vec3::ZERO)
-        } else {
-            (e1, e2)
-        };
+        let vertices = if degenerate { [Vec3::NAN; 3] } else { p };
         let shading = match normals {
             Some(n) => {
                 self.vertex_normals.push(n);
@@ -462,18 +802,16 @@ impl Triangles {
             None => Self::FLAT,
         };
         self.records.push(Triangle {
-            p0: p[0],
-            e1,
-            e2,
+            vertices,
             material,
             shading,
         });
     }
 
-    /// Unit geometric normal `normalize(e1 x e2)`.
+    /// Unit geometric normal `normalize((p1 - p0) x (p2 - p0))`.
     pub fn geometric_normal(&self, i: usize) -> Vec3 {
-        let triangle = &self.records[i];
-        triangle.e1.cross(triangle.e2).normalize_or_zero()
+        let [e1, e2] = self.records[i].edges();
+        e1.cross(e2).normalize_or_zero()
     }
 
     /// [`Shapes::normal`] at `(u, v)`, with the geometric normal made by `geometric` only
@@ -495,15 +833,19 @@ impl LeafPack for Triangles {
     type Pack = TrianglePack8;
 
     fn pack(&self, indices: impl Iterator<Item = usize>) -> TrianglePack8 {
-        let tris: Vec<[Vec3; 3]> = indices
-            .map(|i| self.records[i].vertex_and_edges())
-            .collect();
-        TrianglePack8::new(&tris)
+        let triangles: Vec<[Vec3; 3]> = indices.map(|i| self.records[i].vertices).collect();
+        TrianglePack8::new(&triangles)
     }
 
+    const FRAMED: bool = true;
+
     #[inline(always)]
-    fn leaf(pack: &TrianglePack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
-        leaf_hits(query, pack, t_max)
+    fn leaf<const FRAME: usize>(
+        pack: &TrianglePack8,
+        query: &RayQuery,
+        t_max: f32,
+    ) -> TriangleHit8 {
+        leaf_hits::<FRAME>(query, pack, t_max)
     }
 
     #[inline(always)]
@@ -514,12 +856,10 @@ impl LeafPack for Triangles {
         t_max: F32xP,
         active: LaneBits,
     ) -> PacketHits {
-        let triangle = [pack.p0.lane(slot), pack.e1.lane(slot), pack.e2.lane(slot)];
-        let trusted = || pack.trusted_box(slot);
         packet_hits(
-            query.packet,
-            triangle,
-            trusted,
+            query,
+            |i, axis| pack.vertices[i][axis].lane(slot),
+            || pack.trusted_box(slot),
             query.t_min_lanes(),
             t_max,
             active,
@@ -537,18 +877,12 @@ impl Shapes for Triangles {
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {
-        corner_box(self.records[i].vertex_and_edges()).unwrap_or(Aabb::EMPTY)
+        corner_box(self.records[i].vertices).unwrap_or(Aabb::EMPTY)
     }
 
     #[inline]
     fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
-        triangle_hit(
-            &query.ray,
-            self.records[i].vertex_and_edges(),
-            query.t_min,
-            t_max,
-            || *query,
-        )
+        triangle_hit(query, self.records[i].vertices, t_max)
     }
 
     fn intersect_packet(
@@ -558,8 +892,8 @@ impl Shapes for Triangles {
         t_max: F32xP,
         active: LaneBits,
     ) -> PacketHits {
-        let [p0, e1, e2] = self.records[i].vertex_and_edges();
-        triangle_packet(query.packet, p0, e1, e2, query.t_min_lanes(), t_max, active)
+        let vertices = self.records[i].vertices;
+        triangle_packet(query, vertices, query.t_min_lanes(), t_max, active)
     }
 
     /// The geometric normal of P3F.md section 2 (triangles have no inside), or for smooth
@@ -568,36 +902,38 @@ impl Shapes for Triangles {
         self.shading_normal(self.records[i].shading, u, v, || self.geometric_normal(i))
     }
 
-    /// `p0 + u e1 + v e2`, a point of the plane the test sees whatever `u` and `v` are. Its
-    /// sum is off by `gamma(7)` of its terms, as pbrt-v4 bounds its triangles' points. A
-    /// ray leaving it meets the plane again where Möller-Trumbore's triple product
-    /// `e2 . ((o - p0) x e1)` has the wrong sign; that product is off by `gamma(5)` of
-    /// `|o - p0| |e1| |e2|`, which is `|o - p0| / sin(angle between e1 and e2)` along the
-    /// normal, so a sliver's bound grows with its skew.
+    /// `p0 + u e1 + v e2` (`e1 = p1 - p0`, `e2 = p2 - p0`), a point of the triangle's plane
+    /// whatever `u` and `v` are. Its sum is off by `gamma(7)` of its terms, as pbrt-v4
+    /// bounds its triangles' points. A ray leaving it must not meet the triangle again. The
+    /// watertight test's `t` has the sign of the triple product of the vertices relative to
+    /// the ray's origin (`a`, `b`, `c`), which is `|e1 x e2|` times the origin's height over
+    /// the plane; rounding the vertices into the ray's frame moves that product by up to
+    /// `13.4 eps (w |a| + u |b| + v |c|) |e1 x e2|`, and rounding the edge functions by up
+    /// to `12 eps |a| |b| |c|` (`eps` the unit roundoff, `w = 1 - u - v`). So the bound adds
+    /// `self_hit_margin`, the height those come to (the second grows for a needle, a
+    /// triangle with one short side). Random triangles, slivers and needles among them,
+    /// met again from their own points in random directions, came to a third of it at
+    /// most.
     #[inline]
     fn surface_point(&self, i: usize, _ray: &Ray, _t: f32, u: f32, v: f32) -> SurfacePoint {
-        let Triangle {
-            p0,
-            e1,
-            e2,
-            shading,
-            ..
-        } = self.records[i];
+        let record = &self.records[i];
+        let [e1, e2] = record.edges();
         let (along1, along2) = (u * e1, v * e2);
+        let p0 = record.vertices[0];
         let point = p0 + along1 + along2;
         // One cross product for the bound's area and the normal.
         let cross = e1.cross(e2);
         let area = cross.length();
-        let skew = if area > 0.0 {
-            e1.length() * e2.length() / area
-        } else {
-            1.0
-        };
-        let product = gamma(5) * skew * (along1 + along2).length();
+        let along = along1 + along2;
+        let margin = self_hit_margin(
+            [along, along - e1, along - e2].map(Vec3::length),
+            [1.0 - u - v, u, v],
+            area,
+        );
         SurfacePoint {
             point,
-            error: gamma(7) * (p0.abs() + along1.abs() + along2.abs()) + Vec3::splat(product),
-            normal: self.shading_normal(shading, u, v, || cross.normalize_or_zero()),
+            error: gamma(7) * (p0.abs() + along1.abs() + along2.abs()) + Vec3::splat(margin),
+            normal: self.shading_normal(record.shading, u, v, || cross.normalize_or_zero()),
         }
     }
 
@@ -605,19 +941,22 @@ impl Shapes for Triangles {
     /// is left to [`Shapes::surface_point`].
     fn surface_points8(&self, indices: [usize; 8], rays: &[Ray; 8], hits: &Hits8) -> SurfacePoint8 {
         let records = indices.map(|i| &self.records[i]);
-        let field = |f: fn(&Triangle) -> Vec3| Vec3x8::from_lanes(records.map(f));
-        let (p0, e1, e2) = (field(|r| r.p0), field(|r| r.e1), field(|r| r.e2));
+        let vertex = |k: usize| Vec3x8::from_lanes(records.map(|r| r.vertices[k]));
+        let p0 = vertex(0);
+        let (e1, e2) = (vertex(1) - p0, vertex(2) - p0);
         let (u, v) = (F32x8::from_array(hits.u), F32x8::from_array(hits.v));
         let (along1, along2) = (e1.scale(u), e2.scale(v));
         let point = p0 + along1 + along2;
         let cross = e1.cross(e2);
         let area = cross.length();
-        let skew = area
-            .gt(F32x8::ZERO)
-            .select(e1.length() * e2.length() / area, F32x8::splat(1.0));
-        let product = F32x8::splat(gamma(5)) * skew * (along1 + along2).length();
+        let along = along1 + along2;
+        let margin = self_hit_margin8(
+            [along, along - e1, along - e2].map(|d| d.length()),
+            [F32x8::splat(1.0) - u - v, u, v],
+            area,
+        );
         let sum = p0.abs() + along1.abs() + along2.abs();
-        let error = sum.scale(F32x8::splat(gamma(7))) + Vec3x8::from_components(product);
+        let error = sum.scale(F32x8::splat(gamma(7))) + Vec3x8::from_components(margin);
         // `normalize_or_zero`: the cross product over its length where that is a number.
         let rcp = F32x8::splat(1.0) / area;
         let normal =
@@ -642,9 +981,8 @@ impl Shapes for Triangles {
 mod tests {
     use super::*;
 
-    const P0: Vec3 = Vec3::new(0., 0., 0.);
-    const E1: Vec3 = Vec3::new(1., 0., 0.);
-    const E2: Vec3 = Vec3::new(0., 1., 0.);
+    /// The triangle `(0, 0, 0), (1, 0, 0), (0, 1, 0)`.
+    const UNIT: [Vec3; 3] = [Vec3::ZERO, Vec3::X, Vec3::Y];
 
     fn down_at(x: f32, y: f32) -> Ray {
         Ray::new(Vec3::new(x, y, 2.0), Vec3::new(0., 0., -1.))
@@ -654,20 +992,20 @@ mod tests {
     fn a_pack_keeps_each_slots_trusted_box() {
         let max = Vec3::splat(f32::MAX);
         let triangles = [
-            [P0, E1, E2],
+            UNIT,
             [
                 Vec3::new(-3.0, 2.5, 1e-3),
-                Vec3::new(1e-7, 0.0, 4.0),
-                Vec3::new(-2.0, 1e-7, 0.0),
+                Vec3::new(-3.0, 2.5, 4.0),
+                Vec3::new(-5.0, 2.5, 1e-3),
             ],
             [
                 Vec3::splat(1e9),
-                Vec3::new(-64.0, 128.0, 0.0),
-                Vec3::new(0.0, 0.0, -1e3),
+                Vec3::new(1e9 - 64.0, 1e9 + 128.0, 1e9),
+                Vec3::new(1e9, 1e9, 1e9 - 1e3),
             ],
-            [Vec3::new(0.0, -0.0, 5.0), Vec3::ZERO, Vec3::ZERO],
-            // A corner beyond the floats (a vertex at `p0 + e1` of infinity): no box.
-            [max, Vec3::new(f32::MAX, 0.0, 0.0), E2],
+            [Vec3::NAN; 3],
+            // A vertex beyond the floats: no box.
+            [max, Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::Y],
         ];
         let pack = TrianglePack8::new(&triangles);
         let bits =
@@ -678,25 +1016,22 @@ mod tests {
                 bits(trusted_triangle_box(triangle))
             );
         }
+        assert_eq!(pack.trusted_box(3), None);
         assert_eq!(pack.trusted_box(4), None);
-        // The padding's slots hold the zero triangle, as an unused slot does.
-        assert_eq!(
-            bits(pack.trusted_box(7)),
-            bits(trusted_triangle_box([Vec3::ZERO; 3]))
-        );
+        assert_eq!(pack.trusted_box(7), None);
     }
 
     #[test]
     fn hits_interior_with_barycentrics() {
-        let h = triangle(&down_at(0.25, 0.5), P0, E1, E2, 0.0, f32::INFINITY).unwrap();
-        assert!((h.t - 2.0).abs() < 1e-6);
+        let h = triangle(&down_at(0.25, 0.5), UNIT, 0.0, f32::INFINITY).unwrap();
+        assert_eq!(h.t, 2.0);
         assert!((h.u - 0.25).abs() < 1e-6 && (h.v - 0.5).abs() < 1e-6);
     }
 
     #[test]
     fn two_sided() {
         let up = Ray::new(Vec3::new(0.2, 0.2, -1.0), Vec3::Z);
-        assert!((triangle(&up, P0, E1, E2, 0.0, 9.0).unwrap().t - 1.0).abs() < 1e-6);
+        assert_eq!(triangle(&up, UNIT, 0.0, 9.0).unwrap().t, 1.0);
     }
 
     #[test]
@@ -710,32 +1045,107 @@ mod tests {
             (0.0, 1.0),
         ] {
             assert!(
-                triangle(&down_at(x, y), P0, E1, E2, 0.0, 9.0).is_some(),
+                triangle(&down_at(x, y), UNIT, 0.0, 9.0).is_some(),
                 "({x}, {y}) should be on the triangle"
             );
         }
         for (x, y) in [(-1e-4, 0.5), (0.5, -1e-4), (0.5001, 0.5), (1.0001, 0.0)] {
             assert!(
-                triangle(&down_at(x, y), P0, E1, E2, 0.0, 9.0).is_none(),
+                triangle(&down_at(x, y), UNIT, 0.0, 9.0).is_none(),
                 "({x}, {y}) should be off the triangle"
             );
+        }
+    }
+
+    /// An edge function that single precision rounds to zero is taken again in double
+    /// precision, which gives its sign: the ray just beside the edge misses.
+    #[test]
+    fn a_zero_edge_function_gets_its_exact_sign() {
+        // Sheared points whose products round alike in single precision.
+        let (a, b) = ([1.0 + f32::EPSILON, 1.0], [1.0, 1.0 - f32::EPSILON]);
+        assert_eq!(edge(a, b), 0.0);
+        let exact = exact_edges([a, b, [0.0, -1.0]]);
+        assert_eq!(exact[2], f32::EPSILON * f32::EPSILON, "{exact:?}");
+        // The two triangles of a square share its diagonal; a ray down through a point of
+        // the diagonal whose products round alike meets both, and one beside it just one.
+        let square = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+        let (lower, upper) = (
+            [square[0], square[1], square[2]],
+            [square[0], square[2], square[3]],
+        );
+        for x in [1.0 / 3.0, 0.1, 0.7, 0.999_999_9] {
+            let on = down_at(x, x);
+            assert!(triangle(&on, lower, 0.0, 9.0).is_some(), "{x}");
+            assert!(triangle(&on, upper, 0.0, 9.0).is_some(), "{x}");
+            let beside = down_at(x, f32::from_bits(x.to_bits() + 1));
+            let hits = [lower, upper].map(|t| triangle(&beside, t, 0.0, 9.0).is_some());
+            assert_eq!(hits, [false, true], "{x}");
+        }
+    }
+
+    /// Reversing an edge negates its function exactly, whatever the rounding (a zero
+    /// stays `+0.0`).
+    #[test]
+    fn an_edge_reversed_is_negated_exactly() {
+        let points = [
+            [0.1f32, 0.7],
+            [1e-3, -3.3],
+            [1.0 / 3.0, 2.0 / 3.0],
+            [-7.25e4, 1e-7],
+        ];
+        for p in points {
+            for q in points {
+                assert_eq!(edge(p, q), -edge(q, p), "{p:?} {q:?}");
+            }
         }
     }
 
     #[test]
     fn parallel_ray_and_degenerate_triangle_miss() {
         let parallel = Ray::new(Vec3::new(-1., 0.2, 0.), Vec3::X);
-        assert_eq!(triangle(&parallel, P0, E1, E2, 0.0, 9.0), None);
+        assert_eq!(triangle(&parallel, UNIT, 0.0, 9.0), None);
+        let line = [Vec3::ZERO, Vec3::X, 2.0 * Vec3::X];
+        assert_eq!(triangle(&down_at(0.5, 0.0), line, 0.0, 9.0), None);
         assert_eq!(
-            triangle(&down_at(0.0, 0.0), P0, Vec3::ZERO, Vec3::ZERO, 0.0, 9.0),
+            triangle(&down_at(0.0, 0.0), [Vec3::ZERO; 3], 0.0, 9.0),
             None
         );
+        assert_eq!(triangle(&down_at(0.0, 0.0), [Vec3::NAN; 3], 0.0, 9.0), None);
+    }
+
+    #[test]
+    fn degenerate_triangles_are_stored_as_nan() {
+        let mut triangles = Triangles::default();
+        triangles.push([Vec3::ZERO, Vec3::X, 2.0 * Vec3::X], None, 0);
+        triangles.push(UNIT, None, 0);
+        assert!(triangles.records[0].vertices[0].is_nan());
+        assert_eq!(triangles.records[1].vertices, UNIT);
+        assert_eq!(triangles.bounds(0, [0.0; 2]), Aabb::EMPTY);
     }
 
     #[test]
     fn behind_and_beyond_are_misses() {
         let away = Ray::new(Vec3::new(0.2, 0.2, 1.0), Vec3::Z);
-        assert_eq!(triangle(&away, P0, E1, E2, 0.0, 9.0), None);
-        assert_eq!(triangle(&down_at(0.2, 0.2), P0, E1, E2, 0.0, 1.5), None);
+        assert_eq!(triangle(&away, UNIT, 0.0, 9.0), None);
+        assert_eq!(triangle(&down_at(0.2, 0.2), UNIT, 0.0, 1.5), None);
+    }
+
+    /// Each axis can be a ray's `z`, and the test answers alike in every frame.
+    #[test]
+    fn every_frame_finds_the_hit() {
+        let dirs = [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z];
+        for dir in dirs {
+            let frame = FRAMES[frame_of(dir)];
+            assert_eq!(frame[2] as usize, dir.abs().max_position());
+            // A triangle across the ray, two units ahead.
+            let centre = 2.0 * dir;
+            let (s, r) = (
+                dir.any_orthonormal_vector(),
+                dir.cross(dir.any_orthonormal_vector()),
+            );
+            let tri = [centre - s - r, centre + 2.0 * s, centre + 2.0 * r];
+            let hit = triangle(&Ray::new(Vec3::ZERO, dir), tri, 0.0, 9.0).unwrap();
+            assert_eq!(hit.t, 2.0, "{dir}");
+        }
     }
 }

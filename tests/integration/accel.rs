@@ -2,11 +2,12 @@
 //! occlusion answer on random scenes and rays, and the same images of the course scenes.
 
 use crate::common;
+use crate::common::Bounded;
 
 use bumpalo::Bump;
 use glam::Vec3;
 use p3trace::accel::count::{LaneTallies, NoCount, Tally};
-use p3trace::accel::stream::{self, Occlusions, Query};
+use p3trace::accel::stream::{self, Occlusions};
 use p3trace::accel::{AccelKind, AccelOptions, Tracer};
 use p3trace::accel::{BvhBuild, BvhWidth};
 use p3trace::intersect::{self, IntersectOptions, SphereRoots};
@@ -456,20 +457,6 @@ proptest! {
                 }
             }
         }
-    }
-}
-
-/// A query of a stream: a ray and its `t_max`.
-#[derive(Clone, Copy)]
-struct Bounded(Ray, f32);
-
-impl Query for Bounded {
-    fn ray(&self) -> &Ray {
-        &self.0
-    }
-
-    fn t_max(&self) -> f32 {
-        self.1
     }
 }
 

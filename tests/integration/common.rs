@@ -5,7 +5,9 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+use p3trace::accel::stream::Query;
 use p3trace::accel::AccelKind;
+use p3trace::ray::Ray;
 use p3trace::render::film::Film;
 use p3trace::render::{render, RenderOptions};
 use p3trace::scene::Scene;
@@ -81,4 +83,18 @@ pub fn render_scene(scene: &Scene, configure: impl FnOnce(&mut RenderOptions)) -
     options.accel.kind = AccelKind::Bvh;
     configure(&mut options);
     render(scene, &options).expect("the render runs").film
+}
+
+/// A query of a stream: a ray and its `t_max`.
+#[derive(Clone, Copy)]
+pub struct Bounded(pub Ray, pub f32);
+
+impl Query for Bounded {
+    fn ray(&self) -> &Ray {
+        &self.0
+    }
+
+    fn t_max(&self) -> f32 {
+        self.1
+    }
 }

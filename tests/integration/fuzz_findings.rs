@@ -176,30 +176,47 @@ fn the_grid_walk_allows_for_where_cell_of_puts_a_boundary() {
 /// crash-4739cb5f1bda and crash-155181915153 (2026-11-30, over 5853abf), made
 /// smaller: nine copies of a triangle in the plane x = 0 (within 1e-17) with a corner at
 /// (0, -1e9, -1e9), and a ray along x from (-1e9, -1e9, -1e9) to that corner. The
-/// triangle test gives t = 999984800, 15200 short of the plane: a hit before the
-/// triangle's own padded box (x within 1000 of 0). The midpoint BVH, 8 wide, then skips
-/// the leaves holding the other copies as `beyond` the first hit it finds, and returns
-/// another copy than brute force's tie rule (the first in the file). Fixed in
-/// `intersect::triangle`: each hit is computed again in double precision, at 1e9.
+/// triangle test (Möller-Trumbore then) gave t = 999984800, 15200 short of the plane: a
+/// hit before the triangle's own padded box (x within 1000 of 0). The midpoint BVH, 8
+/// wide, then skipped the leaves holding the other copies as `beyond` the first hit it
+/// found, and returned another copy than brute force's tie rule (the first in the file).
+/// Fixed in `intersect::triangle`: a hit outside the box is computed again in double
+/// precision. The watertight test takes the vertices relative to the ray's origin, where
+/// the needle's two near corners, 1e-17 apart, round to one point: single precision sees
+/// no triangle there, and no structure reports one. The finding stands on a triangle
+/// 1,000 across, hit from 1e9 away at a slant: the copies tie, and every structure
+/// returns the first.
 #[test]
 fn identical_triangles_hit_from_1e9_away_tie_as_brute_force() {
-    let triangle = "p 3 -0.000000000000000017741782 -0.00000000000000000006760319 \
-                    -0.00000000000000000006760319 0.000000000000000000000000000000000000012638724 \
-                    0 -0.00000000000000000006760319 -0.00000000000000000006760319 \
-                    -1000000000 -1000000000\n";
-    let scene = parse_text(&triangle.repeat(9)).unwrap();
-    let g = &scene.geometry;
-    let ray = Ray::new(Vec3::splat(-1e9), Vec3::X);
-    let expected = Tracer::new(g, &AccelOptions::brute_force()).closest(&ray, 0.0, f32::INFINITY);
-    assert!(expected.is_some());
+    let needle = "p 3 -0.000000000000000017741782 -0.00000000000000000006760319 \
+                  -0.00000000000000000006760319 0.000000000000000000000000000000000000012638724 \
+                  0 -0.00000000000000000006760319 -0.00000000000000000006760319 \
+                  -1000000000 -1000000000\n";
+    let wide = "p 3 0 -500 -500 0 500 -500 0 0 500\n";
+    let slant = Vec3::new(1.0, 0.3, 0.2).normalize();
+    let rays = [
+        (needle, Ray::new(Vec3::splat(-1e9), Vec3::X)),
+        (
+            wide,
+            Ray::new(Vec3::new(0.0, 3.0, 7.0) - 1e9 * slant, slant),
+        ),
+    ];
     let options = AccelOptions {
         kind: AccelKind::Bvh,
         bvh: BvhBuild::Midpoint,
         bvh_width: Some(BvhWidth::Eight),
         ..AccelOptions::default()
     };
-    let bvh = Tracer::new(g, &options);
-    assert_eq!(bvh.closest(&ray, 0.0, f32::INFINITY), expected);
+    for (triangle, ray) in rays {
+        let scene = parse_text(&triangle.repeat(9)).unwrap();
+        let g = &scene.geometry;
+        let expected =
+            Tracer::new(g, &AccelOptions::brute_force()).closest(&ray, 0.0, f32::INFINITY);
+        assert_eq!(expected.is_some(), triangle == wide);
+        assert!(expected.is_none_or(|hit| hit.prim.index() == 0));
+        let bvh = Tracer::new(g, &options);
+        assert_eq!(bvh.closest(&ray, 0.0, f32::INFINITY), expected);
+    }
 }
 
 /// The same scene through the default (8-wide) BVH, one ray at a time and in packets:
@@ -288,7 +305,7 @@ fn pointed_cone_is_hit_only_on_its_surface() {
 /// day's restructuring, which did not change it): a sliver triangle in the plane `y = 0`
 /// whose edges are parallel to within rounding (`|e1 x e2| / (|e1| |e2|)` is about 6e-8,
 /// below `f32::EPSILON`), so the reader does not store it as degenerate. Möller-Trumbore's
-/// determinant is then rounding noise, and the test reports a hit at `t = 2` where the
+/// determinant (the test then) is rounding noise, and the test reports a hit at `t = 2` where the
 /// ray is 0.09 off the plane, outside the triangle's padded box: brute force finds it, the
 /// structures, which trust the box, do not. Fixed in `intersect::triangle`: the hit is
 /// computed again in double precision, where the sliver's determinant is exact, and

@@ -20,3 +20,4 @@ mod p3f_reader;
 mod render;
 mod scale;
 mod simd;
+mod watertight;

@@ -75,9 +75,7 @@ fn mesh_negative_indices_count_from_the_end() {
     let scene =
         parse_text("f 1 1 1 1 0 0 0 0 1 0 1\nmesh 3 1\n0 0 0\n1 0 0\n0 1 0\n-3 -2 -1\n").unwrap();
     let t = &scene.geometry.triangles;
-    assert_eq!(t.records[0].p0, Vec3::ZERO);
-    assert_eq!(t.records[0].e1, Vec3::X);
-    assert_eq!(t.records[0].e2, Vec3::Y);
+    assert_eq!(t.records[0].vertices, [Vec3::ZERO, Vec3::X, Vec3::Y]);
 }
 
 #[test]

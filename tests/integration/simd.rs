@@ -5,11 +5,13 @@
 //! planes, degenerate triangles, zero radii and random active masks. Inactive lanes and
 //! padding slots must miss.
 
+use std::cell::OnceCell;
+
 use glam::{Vec2, Vec3};
 use p3trace::intersect::{
     self, Aabb, BoxPack8, BoxRay, BoxRays, Boxes, Hits8, IntersectOptions, Intervals, LeafPack,
-    PacketQuery, RayQuery, Shapes, SpherePack8, SphereRoots, Spheres, SurfacePoint, SurfacePoint8,
-    TriangleHit, TriangleHits, TrianglePack8, Triangles,
+    PacketQuery, RayQuery, Shapes, Shear, ShearLanes, SpherePack8, SphereRoots, Spheres,
+    SurfacePoint, SurfacePoint8, TriangleHit, TriangleHits, TrianglePack8, Triangles,
 };
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::camera::{Camera, FilmSample};
@@ -70,6 +72,20 @@ fn ray() -> impl Strategy<Value = Ray> {
         .prop_map(|(origin, dir, time)| Ray { origin, dir, time })
 }
 
+/// A ray from up to 1e9 away aimed at a point near the origin: the triangle test's hits
+/// from there often fall outside the box and are computed again in double precision.
+fn far_ray() -> impl Strategy<Value = Ray> {
+    (direction(), 1e3f32..1e9, point()).prop_map(|(from, distance, at)| {
+        let origin = from * distance;
+        Ray::new(origin, (at - origin).normalize_or_zero())
+    })
+}
+
+/// The rays of the triangle tests: [`ray`], and [`far_ray`] now and then.
+fn triangle_ray() -> impl Strategy<Value = Ray> {
+    prop_oneof![3 => ray(), 1 => far_ray()]
+}
+
 /// An interval `(t_min, t_max)`, occasionally empty, infinite at both ends or NaN.
 fn interval() -> impl Strategy<Value = (f32, f32)> {
     let lo = prop::sample::select(vec![0.0, 1e-4, -0.0, 2.0, -INF, -3.0, NAN]);
@@ -93,12 +109,14 @@ fn aabb() -> impl Strategy<Value = (Vec3, Vec3)> {
     })
 }
 
-/// `[p0, e1, e2]`, degenerate now and then (zero or parallel edges).
+/// Three vertices, degenerate now and then (all one point, on one line, or NaN, as
+/// `Triangles` stores a degenerate one).
 fn triangle() -> impl Strategy<Value = [Vec3; 3]> {
-    (point(), point(), point(), 0u8..6).prop_map(|(p0, e1, e2, shape)| match shape {
-        0 => [p0, Vec3::ZERO, Vec3::ZERO],
-        1 => [p0, e1, 2.0 * e1],
-        _ => [p0, e1, e2],
+    (point(), point(), point(), 0u8..8).prop_map(|(p0, p1, p2, shape)| match shape {
+        0 => [p0; 3],
+        1 => [p0, p1, p1 + (p1 - p0)],
+        2 => [Vec3::NAN; 3],
+        _ => [p0, p1, p2],
     })
 }
 
@@ -131,6 +149,37 @@ fn coherent_packet() -> impl Strategy<Value = Packet> {
         let signs = p.rays[0].dir;
         for ray in &mut p.rays {
             ray.dir = ray.dir.abs().copysign(signs);
+        }
+        p
+    })
+}
+
+/// The packets of the triangle tests: [`packet`]s; or with every direction turned
+/// cyclically to be longest along lane 0's longest axis, so that every lane takes one frame
+/// in the watertight test; or moved back along their directions by up to 1e9 (as
+/// [`far_ray`]s), every lane over `(0, inf)`. One strategy drawing one packet, not a union
+/// of three: the union's value tree, three packets' worth, overflows a test thread's stack
+/// at sixteen lanes.
+fn triangle_packet() -> impl Strategy<Value = Packet> {
+    (packet(), 0u8..4, 1e3f32..1e9).prop_map(|(mut p, kind, distance)| {
+        match kind {
+            0 => {
+                let axis = p.rays[0].dir.abs().max_position();
+                for ray in &mut p.rays {
+                    let d = ray.dir.to_array();
+                    let longest = ray.dir.abs().max_position();
+                    ray.dir =
+                        Vec3::from_array(std::array::from_fn(|k| d[(k + 3 + longest - axis) % 3]));
+                }
+            }
+            1 => {
+                for (k, ray) in p.rays.iter_mut().enumerate() {
+                    ray.dir = ray.dir.normalize_or(Vec3::X);
+                    ray.origin -= ray.dir * (distance / (k + 1) as f32);
+                }
+                (p.t_min, p.t_max) = ([0.0; PACKET], [INF; PACKET]);
+            }
+            _ => {}
         }
         p
     })
@@ -212,8 +261,9 @@ const CASES: u32 = 2000;
 
 /// A packed kind's [`LeafPack`] against its scalar test (`Shapes::intersect`), bit for
 /// bit: the leaf kernel, one ray within `(t_min, t_max)` against the pack of all of
-/// `storage` (padding slots miss), and each slot against the lanes of `p` from `t_min`,
-/// as the pack holds it and as `storage` does (`Shapes::intersect_packet`).
+/// `storage` (padding slots miss) in the ray's frame (as the walks call it), and each
+/// slot against the lanes of `p` from `t_min`, as the pack holds it and as `storage` does
+/// (`Shapes::intersect_packet`).
 fn pack_equals_scalar<K: LeafPack>(
     what: &str,
     storage: &K,
@@ -225,7 +275,11 @@ fn pack_equals_scalar<K: LeafPack>(
     let n = storage.len();
     let pack = storage.pack(0..n);
     let query = RayQuery::new(ray, t_min, options);
-    let hits = K::leaf(&pack, &query, t_max);
+    let hits = match intersect::frame_of(ray.dir) {
+        0 => K::leaf::<0>(&pack, &query, t_max),
+        1 => K::leaf::<1>(&pack, &query, t_max),
+        _ => K::leaf::<2>(&pack, &query, t_max),
+    };
     for slot in 0..8 {
         let scalar = (slot < n)
             .then(|| storage.intersect(slot, &query, t_max))
@@ -234,10 +288,8 @@ fn pack_equals_scalar<K: LeafPack>(
     }
     let (rays, _, hi, active) = p.soa();
     let rays = RayPacket { t_min, ..rays };
-    let query = PacketQuery {
-        packet: &rays,
-        options,
-    };
+    let shear = OnceCell::new();
+    let query = PacketQuery::new(&rays, options, &shear);
     for slot in 0..n {
         let in_pack = K::slot_packet(&pack, slot, &query, hi, active);
         let in_storage = storage.intersect_packet(slot, &query, hi, active);
@@ -318,17 +370,49 @@ proptest! {
         }
     }
 
+    /// The packet kernel against the scalar test, for packets whose lanes take one frame
+    /// (the shared frame's path) and for any.
     #[test]
-    fn triangle_packet_equals_scalar(p in packet(), tri in triangle()) {
+    fn triangle_packet_equals_scalar(
+        p in triangle_packet(),
+        tri in triangle(),
+    ) {
         let (rays, t_min, t_max, active) = p.soa();
-        let [p0, e1, e2] = tri;
-        let hits = intersect::triangle_packet(&rays, p0, e1, e2, t_min, t_max, active);
+        let rays = rays.with_active(active);
+        let shear = OnceCell::new();
+        let query = PacketQuery::new(&rays, IntersectOptions::default(), &shear);
+        let hits = intersect::triangle_packet(&query, tri, t_min, t_max, active);
         for (i, ray) in p.rays.iter().enumerate() {
-            let scalar = intersect::triangle(ray, p0, e1, e2, p.t_min[i], p.t_max[i])
+            let scalar = intersect::triangle(ray, tri, p.t_min[i], p.t_max[i])
                 .filter(|_| p.active(i));
             same("triangle t", i, scalar.map(|h| h.t), hits.hit, hits.t);
             same("triangle u", i, scalar.map(|h| h.u), hits.hit, hits.u);
             same("triangle v", i, scalar.map(|h| h.v), hits.hit, hits.v);
+        }
+    }
+
+    /// A packet's shears, lane by lane, are the rays' own, bit for bit, in the lanes it asks,
+    /// and its lanes grouped by frame are grouped by each ray's frame.
+    #[test]
+    fn shear_lanes_equal_scalar(p in triangle_packet()) {
+        let (rays, ..) = p.soa();
+        let lanes = ShearLanes::new(&rays.with_active(p.active));
+        let by_frame = lanes.lanes_by_frame();
+        for (k, ray) in p.rays.iter().enumerate().filter(|&(k, _)| p.active(k)) {
+            let query = RayQuery::new(ray, 0.0, IntersectOptions::default());
+            let (lane, scalar) = (lanes.lane(k), Shear::of(&query));
+            let frames = by_frame.map(|group| group >> k & 1);
+            let mut own = [0; 3];
+            own[intersect::frame_of(ray.dir)] = 1;
+            prop_assert_eq!(frames, own, "lane {}: {:?}", k, ray);
+            prop_assert_eq!(lane.axes(), scalar.axes(), "lane {}: {:?}", k, ray);
+            prop_assert_eq!(
+                lane.parts().map(bits3),
+                scalar.parts().map(bits3),
+                "lane {}: {:?}",
+                k,
+                ray
+            );
         }
     }
 
@@ -407,7 +491,7 @@ proptest! {
 
     #[test]
     fn triangle_leaf_equals_scalar(
-        ray in ray(),
+        ray in triangle_ray(),
         (t_min, t_max) in interval(),
         triangles in prop::collection::vec(triangle(), 0..=8),
     ) {
@@ -416,7 +500,7 @@ proptest! {
         for i in 0..8 {
             let scalar = triangles
                 .get(i)
-                .and_then(|&[p0, e1, e2]| intersect::triangle(&ray, p0, e1, e2, t_min, t_max));
+                .and_then(|&tri| intersect::triangle(&ray, tri, t_min, t_max));
             same("triangle leaf t", i, scalar.map(|h| h.t), hits.hit, hits.t);
             same("triangle leaf u", i, scalar.map(|h| h.u), hits.hit, hits.u);
             same("triangle leaf v", i, scalar.map(|h| h.v), hits.hit, hits.v);
@@ -445,14 +529,14 @@ proptest! {
 
     #[test]
     fn triangle_pack_equals_scalar(
-        ray in ray(),
+        ray in triangle_ray(),
         limits in interval(),
-        p in packet(),
+        p in triangle_packet(),
         triangles in prop::collection::vec(triangle(), 0..=8),
     ) {
         let mut storage = Triangles::default();
-        for [p0, e1, e2] in triangles {
-            storage.push([p0, p0 + e1, p0 + e2], None, 0);
+        for tri in triangles {
+            storage.push(tri, None, 0);
         }
         pack_equals_scalar("triangle pack", &storage, &ray, limits, &p, IntersectOptions::default());
     }
@@ -732,7 +816,7 @@ proptest! {
         prop_assert!(spheres.none() && triangles.hit.none() && boxes.none());
         // The same slots through the scalar routines.
         prop_assert!(intersect::sphere(&ray, Vec3::ZERO, SpherePack8::PAD_RADIUS, t_min, t_max).is_none());
-        prop_assert!(intersect::triangle(&ray, Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, t_min, t_max).is_none());
+        prop_assert!(intersect::triangle(&ray, [Vec3::NAN; 3], t_min, t_max).is_none());
         prop_assert!(intersect::aabb(&ray, inv_dir, BoxPack8::PAD, BoxPack8::PAD, t_min, t_max).is_none());
     }
 }
@@ -969,9 +1053,8 @@ proptest! {
         let mut tris = Triangles::default();
         let mut spheres = Spheres::default();
         for k in 0..8 {
-            let [p0, e1, e2] = triangles[k];
             let smooth = (smooth >> k & 1 == 1).then(|| [normals[k], normals[(k + 1) % 8], normals[(k + 2) % 8]]);
-            tris.push([p0, p0 + e1, p0 + e2], smooth, 0);
+            tris.push(triangles[k], smooth, 0);
             spheres.push(centres[k], radii[k], 0);
         }
         let hits = Hits8 { t, u, v };

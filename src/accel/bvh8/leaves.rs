@@ -41,8 +41,13 @@ impl<K: LeafPack> Packs<K> {
 
     /// Tests pack `index` against `query`, keeping the winner in `closest`.
     #[inline(always)]
-    fn closest(&self, index: usize, query: &RayQuery, closest: &mut ClosestHit) {
-        let hits = K::leaf(&self.packs[index], query, closest.bound());
+    fn closest<const FRAME: usize>(
+        &self,
+        index: usize,
+        query: &RayQuery,
+        closest: &mut ClosestHit,
+    ) {
+        let hits = K::leaf::<FRAME>(&self.packs[index], query, closest.bound());
         let (t, u, v) = (hits.t.to_array(), hits.u.to_array(), hits.v.to_array());
         let ids = &self.ids[index];
         for_lanes(hits.hit.bitmask(), |k| {
@@ -57,8 +62,8 @@ impl<K: LeafPack> Packs<K> {
 
     /// Whether a primitive of pack `index` blocks `query` within `(t_min, t_max)`.
     #[inline(always)]
-    fn blocks(&self, index: usize, query: &RayQuery, t_max: f32) -> bool {
-        K::leaf(&self.packs[index], query, t_max).hit.any()
+    fn blocks<const FRAME: usize>(&self, index: usize, query: &RayQuery, t_max: f32) -> bool {
+        K::leaf::<FRAME>(&self.packs[index], query, t_max).hit.any()
     }
 
     /// The primitives of pack `index`, which holds `count`, against the lanes `lanes`
@@ -191,14 +196,39 @@ macro_rules! define_leaves {
                 }
             }
 
+            /// Whether the tree holds packs whose test reads the ray's frame
+            /// ([`LeafPack::FRAMED`]).
+            #[inline(always)]
+            pub fn framed(&self) -> bool {
+                false $(|| (<crate::intersect::$storage as LeafPack>::FRAMED
+                    && !self.$field.packs.is_empty()))*
+            }
+
+            /// The frame ([`crate::intersect::frame_of`]) a walk of `query` takes: its
+            /// own where the tree's packs read it, else one for every ray, so that a tree
+            /// without them walks in one frame.
+            #[inline(always)]
+            pub fn frame(&self, query: &RayQuery) -> usize {
+                if self.framed() {
+                    crate::intersect::frame_of(query.ray.dir)
+                } else {
+                    2
+                }
+            }
+
             /// Tests the pack of the leaf `child` against `query`, keeping the winner in
             /// `closest`; `false` when `child` holds no pack (a run of primitives).
             #[inline(always)]
-            pub fn closest(&self, child: ChildRef, query: &RayQuery, closest: &mut ClosestHit) -> bool {
+            pub fn closest<const FRAME: usize>(
+                &self,
+                child: ChildRef,
+                query: &RayQuery,
+                closest: &mut ClosestHit,
+            ) -> bool {
                 let (code, _, index) = leaf_parts(child);
                 match code {
                     $(c if c == const { pack_code(PrimKind::$kind) } => {
-                        self.$field.closest(index, query, closest);
+                        self.$field.closest::<FRAME>(index, query, closest);
                         true
                     })*
                     _ => false,
@@ -208,11 +238,16 @@ macro_rules! define_leaves {
             /// Whether a primitive of the pack of the leaf `child` blocks `query` within
             /// `(t_min, t_max)`; `None` when `child` holds no pack.
             #[inline(always)]
-            pub fn blocks(&self, child: ChildRef, query: &RayQuery, t_max: f32) -> Option<bool> {
+            pub fn blocks<const FRAME: usize>(
+                &self,
+                child: ChildRef,
+                query: &RayQuery,
+                t_max: f32,
+            ) -> Option<bool> {
                 let (code, _, index) = leaf_parts(child);
                 match code {
                     $(c if c == const { pack_code(PrimKind::$kind) } => {
-                        Some(self.$field.blocks(index, query, t_max))
+                        Some(self.$field.blocks::<FRAME>(index, query, t_max))
                     })*
                     _ => None,
                 }

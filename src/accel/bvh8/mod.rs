@@ -21,7 +21,7 @@ use super::bvh2::{Bvh2Stats, BvhBuild};
 use super::count::Count;
 use super::hit::ClosestHit;
 use super::structure::Structure;
-use crate::intersect::{PacketQuery, RayQuery};
+use crate::intersect::{with_frame, PacketQuery, RayQuery};
 use crate::plural::count;
 use crate::prim::PrimId;
 use crate::scene::Geometry;
@@ -60,11 +60,11 @@ const SHALLOW_STACK: usize = stack_size(SHALLOW_DEPTH);
 /// Calls the walk `$walk` of `$tree` with the stack its depth asks for; a deep walk out
 /// of line, so that its stack is not in the frame of every caller.
 macro_rules! walk {
-    ($tree:ident.$walk:ident::<$count:ty>($($arg:expr),*)) => {
+    ($tree:ident.$walk:ident::<$count:ty $(, $frame:ident)?>($($arg:expr),*)) => {
         if $tree.depth <= SHALLOW_DEPTH {
-            $tree.$walk::<$count, SHALLOW_STACK>($($arg),*)
+            $tree.$walk::<$count, SHALLOW_STACK $(, $frame)?>($($arg),*)
         } else {
-            out_of_line(|| $tree.$walk::<$count, DEEP_STACK>($($arg),*))
+            out_of_line(|| $tree.$walk::<$count, DEEP_STACK $(, $frame)?>($($arg),*))
         }
     };
 }
@@ -85,7 +85,9 @@ impl Structure for Bvh8 {
         count: &mut C,
     ) {
         if !self.nodes.is_empty() {
-            walk!(self.closest_from::<C>(0, geometry, query, closest, count));
+            with_frame!(self.leaves.frame(query), FRAME => {
+                walk!(self.closest_from::<C, FRAME>(0, geometry, query, closest, count))
+            });
         }
     }
 
@@ -97,7 +99,10 @@ impl Structure for Bvh8 {
         t_max: f32,
         count: &mut C,
     ) -> bool {
-        !self.nodes.is_empty() && walk!(self.occluded_from::<C>(0, geometry, query, t_max, count))
+        !self.nodes.is_empty()
+            && with_frame!(self.leaves.frame(query), FRAME => {
+                walk!(self.occluded_from::<C, FRAME>(0, geometry, query, t_max, count))
+            })
     }
 
     #[inline]
@@ -177,6 +182,7 @@ mod tests {
     use crate::ray::{Ray, RayPacket};
     use crate::scene::p3f::parse_text;
     use glam::Vec3;
+    use std::cell::OnceCell;
 
     /// The stacks sized for the deepest trees (which only contrived scenes reach) answer
     /// as the shallow ones: each walk, one ray and packets, closest and occlusion.
@@ -214,10 +220,8 @@ mod tests {
         for packet_rays in rays.chunks_exact(PACKET) {
             let packet_rays: &[Ray; PACKET] = packet_rays.try_into().unwrap();
             let packet = RayPacket::new(packet_rays).with_t_max([30.0; PACKET]);
-            let query = PacketQuery {
-                packet: &packet,
-                options,
-            };
+            let shear = OnceCell::new();
+            let query = PacketQuery::new(&packet, options, &shear);
             let [closest_shallow, closest_deep] = [&shallow, &deep].map(|tree| {
                 let mut closest = [ClosestHit::new(f32::INFINITY); PACKET];
                 tree.closest_packet::<NoCount>(geometry, &query, &mut closest, &mut NoCount);

@@ -1,7 +1,8 @@
 //! Packet traversal of the 8-wide tree: each node's children culled for the whole packet
 //! by its [`RayRange`] (one test of the eight boxes), those left tested against all the
 //! packet's rays at once, a subtree left with few lanes finished one ray at a time by
-//! `traverse.rs`, so each lane's answer is the single ray's bit for bit. A leaf of packed
+//! `traverse.rs` (the lanes grouped by their ray's frame, which those walks take as a
+//! constant), so each lane's answer is the single ray's bit for bit. A leaf of packed
 //! primitives holding few of them against the lanes the packet brings (SAH leaves hold
 //! two on average; `leaves.rs` weighs the two tests) tests each primitive against all the
 //! lanes at once, by the primitives' packet kernels, rather than each lane against all
@@ -12,7 +13,7 @@ use super::Bvh8;
 use crate::accel::count::{Count, CountLanes};
 use crate::accel::hit::ClosestHit;
 use crate::accel::stack::Stack;
-use crate::intersect::{beyond_lanes, BoxRays, PacketQuery, RayRange};
+use crate::intersect::{beyond_lanes, with_frame, BoxRays, PacketQuery, RayRange};
 use crate::scene::Geometry;
 use crate::simd::{for_lanes, F32xP, LaneBits, MaskP, PACKET};
 
@@ -62,21 +63,30 @@ impl Bvh8 {
                 continue;
             }
             if leaf || lanes.count_ones() <= SINGLE_RAY_LANES {
-                for_lanes(lanes, |k| {
-                    let (lane, mut counted) = (query.lane(k), C::default());
-                    if leaf {
-                        self.closest_in_leaf(geometry, child, &lane, &mut closest[k], &mut counted);
-                    } else {
-                        self.closest_from::<C, STACK>(
-                            child,
-                            geometry,
-                            &lane,
-                            &mut closest[k],
-                            &mut counted,
-                        );
-                    }
-                    count.add_lane(k, &counted);
-                });
+                for (frame, lanes) in self.lanes_by_frame(query, lanes).into_iter().enumerate() {
+                    with_frame!(frame, FRAME => for_lanes(lanes, |k| {
+                        let (lane, mut counted) = (query.lane(k), C::default());
+                        let closest = &mut closest[k];
+                        if leaf {
+                            self.closest_in_leaf::<C, FRAME>(
+                                geometry,
+                                child,
+                                &lane,
+                                closest,
+                                &mut counted,
+                            );
+                        } else {
+                            self.closest_from::<C, STACK, FRAME>(
+                                child,
+                                geometry,
+                                &lane,
+                                closest,
+                                &mut counted,
+                            );
+                        }
+                        count.add_lane(k, &counted);
+                    }));
+                }
                 limit = lanes_of(closest, ClosestHit::limit);
                 continue;
             }
@@ -141,24 +151,26 @@ impl Bvh8 {
                 continue;
             }
             if leaf || lanes.count_ones() <= SINGLE_RAY_LANES {
-                for_lanes(lanes, |k| {
-                    let (lane, mut counted) = (query.lane(k), C::default());
-                    let hit = if leaf {
-                        self.blocks(geometry, child, &lane, t_max[k], &mut counted)
-                    } else {
-                        self.occluded_from::<C, STACK>(
-                            child,
-                            geometry,
-                            &lane,
-                            t_max[k],
-                            &mut counted,
-                        )
-                    };
-                    count.add_lane(k, &counted);
-                    if hit {
-                        blocked |= 1 << k;
-                    }
-                });
+                for (frame, lanes) in self.lanes_by_frame(query, lanes).into_iter().enumerate() {
+                    with_frame!(frame, FRAME => for_lanes(lanes, |k| {
+                        let (lane, mut counted) = (query.lane(k), C::default());
+                        let hit = if leaf {
+                            self.blocks::<C, FRAME>(geometry, child, &lane, t_max[k], &mut counted)
+                        } else {
+                            self.occluded_from::<C, STACK, FRAME>(
+                                child,
+                                geometry,
+                                &lane,
+                                t_max[k],
+                                &mut counted,
+                            )
+                        };
+                        count.add_lane(k, &counted);
+                        if hit {
+                            blocked |= 1 << k;
+                        }
+                    }));
+                }
                 if blocked == active {
                     break;
                 }
@@ -179,6 +191,17 @@ impl Bvh8 {
             });
         }
         blocked
+    }
+
+    /// The lanes `lanes` of `query`'s packet by the frame their walks take
+    /// ([`Leaves::frame`](super::leaves::Leaves::frame)): `[x, y, z]`, from the packet's
+    /// triangle setup where the tree holds triangles.
+    #[inline(always)]
+    fn lanes_by_frame(&self, query: &PacketQuery, lanes: LaneBits) -> [LaneBits; 3] {
+        if !self.leaves.framed() {
+            return [0, 0, lanes];
+        }
+        query.shear().lanes_by_frame().map(|frame| frame & lanes)
     }
 }
 
