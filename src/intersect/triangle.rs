@@ -364,21 +364,26 @@ fn watertight(shear: &Shear, vertices: [Vec3; 3], t_min: f32) -> Option<Triangle
         return None;
     }
     let edges = if edges.contains(&0.0) {
-        exact_edges(sheared)
+        // Signs that single precision could not give may straddle zero too.
+        let exact = exact_edges(sheared);
+        if straddles(exact) {
+            return None;
+        }
+        exact
     } else {
         edges
     };
     hit_of(edges, [a.z, b.z, c.z], sz, t_min)
 }
 
-/// The hit of a ray whose edge functions are `edges` and whose frame's `z` puts the
-/// vertices at `depths`, in `(t_min, inf)`: none where the edge functions straddle zero
-/// or the determinant, their sum, is zero or not finite.
+/// The hit of a ray whose edge functions, of one sign or zero, are `edges` and whose
+/// frame's `z` puts the vertices at `depths`, in `(t_min, inf)`: none where the
+/// determinant, their sum, is zero or not finite.
 #[inline(always)]
 fn hit_of(edges: [f32; 3], depths: [f32; 3], sz: f32, t_min: f32) -> Option<TriangleHit> {
     let [u, v, w] = edges;
     let det = u + v + w;
-    if straddles(edges) || det == 0.0 || !det.is_finite() {
+    if det == 0.0 || !det.is_finite() {
         return None;
     }
     let inv_det = 1.0 / det;
