@@ -13,11 +13,12 @@ the project's own sources inlined there), so that the groups add up to the whole
 BENCHMARKS.md's shading budget comes from it:
 
     valgrind --tool=callgrind --dump-instr=yes --callgrind-out-file=cg.out \\
-      target/release/p3trace render SCENE --threads 1 --accel bvh --no-skybox -q -o x.png
-    scripts/inline-lines.py cg.out target/release/p3trace src/render/stream.rs \\
+      target/portable/release/p3trace render SCENE --threads 1 --accel bvh --no-skybox -q -o x.png
+    scripts/inline-lines.py cg.out target/portable/release/p3trace src/render/stream.rs \\
       --expand shade_depth
 
-Needs binutils' addr2line and a binary with line tables (the release profile has them).
+Needs binutils' addr2line and a binary with line tables (the release profile has them), and
+valgrind the portable build (CONTRIBUTING.md) where the CPU has AVX-512.
 """
 
 import argparse

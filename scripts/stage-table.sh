@@ -18,11 +18,13 @@ resolution=${4:+--resolution $4}
 for tool in perf valgrind addr2line; do
   command -v "$tool" >/dev/null || { echo "stage-table: $tool is missing" >&2; exit 2; }
 done
-cargo build --release --quiet
+# The portable build (x86-64-v3): valgrind cannot run AVX-512, which the default build
+# uses where the CPU has it.
+RUSTFLAGS='-C target-cpu=x86-64-v3' cargo build --release --quiet --target-dir target/portable
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 binary=$out/p3trace   # a copy, so that a rebuild meanwhile cannot part the profiles
-cp target/release/p3trace "$binary"
+cp target/portable/release/p3trace "$binary"
 render=("$binary" render "$shared/scenes/$scene.p3f" --threads 1 --accel bvh --no-skybox -q
         --spp "$spp" $resolution -o "$out/image.png")
 perf record -q -e cpu-clock -F 20000 -o "$out/perf.data" -- "${render[@]}" 2>/dev/null

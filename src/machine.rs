@@ -1,14 +1,15 @@
 //! The machine: what this binary was built for (version, commit, instruction set) and
 //! what the CPU it runs on offers. `main` checks the CPU before anything else, by
 //! `src/cpu_check.c`, which `build.rs` compiles for the plain x86-64 baseline: a check in
-//! Rust, compiled for x86-64-v3, would use the instructions it checks for before it could
-//! say why it stops. `build.rs` also records the commit and the target's CPU and features.
+//! Rust, compiled for the building CPU, would use the instructions it checks for before it
+//! could say why it stops. `build.rs` also records the commit and the target's CPU and
+//! features.
 
 /// The version of Cargo.toml.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 /// The commit the binary was built from (`unknown` outside a git checkout).
 pub const COMMIT: &str = env!("P3TRACE_COMMIT");
-/// The `-C target-cpu` the code was compiled for (`.cargo/config.toml`: x86-64-v3).
+/// The `-C target-cpu` the code was compiled for (`.cargo/config.toml`: native).
 pub const TARGET_CPU: &str = env!("P3TRACE_TARGET_CPU");
 /// Every target feature the compiler could use, separated by ", ".
 pub const TARGET_FEATURES: &str = env!("P3TRACE_TARGET_FEATURES");
@@ -31,19 +32,11 @@ pub const LONG_VERSION: &str = concat!(
 #[cfg(target_arch = "x86_64")]
 extern "C" {
     /// src/cpu_check.c: exits 1, naming what is missing, on a CPU without the extensions
-    /// the Rust code was compiled for.
-    fn p3trace_check_cpu();
-}
-
-/// Exits 1 with a message that names the missing extensions and how to build for this
-/// CPU, when it lacks what the binary was compiled to use; without the check such a CPU
-/// dies of an illegal instruction. `main` calls it before anything else.
-pub fn check_cpu() {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a C function without arguments that reads CPUID and may exit.
-    unsafe {
-        p3trace_check_cpu()
-    }
+    /// the Rust code was compiled for; without the check such a CPU dies of an illegal
+    /// instruction. The binary runs it before any Rust code (`main.rs`, `.preinit_array`):
+    /// even the standard library's start-up is compiled, through link-time optimisation,
+    /// for the target CPU.
+    pub fn p3trace_check_cpu();
 }
 
 /// The x86-64 features both the compiler and the CPU can be asked about, each as
@@ -60,7 +53,10 @@ fn features() -> Vec<(&'static str, bool, bool)> {
     x86_features!(
         "sse3" "ssse3" "sse4.1" "sse4.2" "popcnt" "cmpxchg16b" "avx" "avx2" "bmi1" "bmi2"
         "fma" "f16c" "lzcnt" "movbe" "xsave" "avx512f" "avx512cd" "avx512bw" "avx512dq"
-        "avx512vl"
+        "avx512vl" "adx" "aes" "pclmulqdq" "rdrand" "rdseed" "sha" "xsavec" "xsaveopt" "xsaves"
+        "sse4a" "tbm" "rtm" "gfni" "vaes" "vpclmulqdq" "avx512ifma" "avx512vbmi" "avx512vbmi2"
+        "avx512vnni" "avx512bitalg" "avx512vpopcntdq" "avx512bf16" "avx512fp16"
+        "avx512vp2intersect" "avxvnni" "kl" "widekl"
     )
     .to_vec()
 }

@@ -39,10 +39,16 @@ enum Failure {
     Run(String),
 }
 
+/// The CPU check, run by the dynamic loader before any other code of the binary (the
+/// standard library's start-up included, which link-time optimisation compiles for the
+/// target CPU too): a CPU without the instructions the binary was compiled for would
+/// otherwise die of an illegal instruction.
+#[cfg(all(target_arch = "x86_64", target_os = "linux"))]
+#[used]
+#[link_section = ".preinit_array"]
+static CHECK_CPU_FIRST: unsafe extern "C" fn() = p3trace::machine::p3trace_check_cpu;
+
 fn main() -> ExitCode {
-    // First, before any code that may use them: a CPU without the instructions the
-    // binary was compiled for would otherwise die of an illegal instruction.
-    p3trace::machine::check_cpu();
     // A closed pipe ends the program quietly, as it does other command-line tools: Rust
     // ignores SIGPIPE, so every `println!` into a closed pipe would panic instead.
     #[cfg(unix)]
