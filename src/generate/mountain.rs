@@ -15,8 +15,9 @@ use glam::{DVec2, DVec3};
 
 use super::{Camera, Finish, Header, P3fWriter};
 
-/// The largest level: 2 * 4^10, about two million triangles.
-pub const MAX_LEVEL: u32 = 10;
+/// The largest level: 2 * 4^12, about 33.5 million triangles (the scale curve,
+/// `scripts/scale-curve.py`, reaches it where memory allows).
+pub const MAX_LEVEL: u32 = 12;
 
 /// Standard deviation of a midpoint's displacement over the length of its edge. The
 /// course's `mount_very_high` measures 0.23 to 0.26 at every level.

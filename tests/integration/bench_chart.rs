@@ -34,7 +34,7 @@ fn have_python() -> bool {
     have("python3", "pass")
 }
 
-fn have_matplotlib() -> bool {
+pub(crate) fn have_matplotlib() -> bool {
     have_python()
         && have(
             "matplotlib (python3 -m pip install -r scripts/requirements.txt)",

@@ -271,7 +271,7 @@ fn gen_writes_the_scenes_of_scenes_and_refuses_what_it_cannot_make() {
     assert_eq!(std::fs::read_dir(&sky).unwrap().count(), 6);
 
     for args in [
-        &["gen", "mount", "--level", "11"][..],
+        &["gen", "mount", "--level", "13"][..],
         &["gen", "balls", "--depth", "8"],
         &["gen", "dragon", "--ply", "/nonexistent.ply", "-o", "x.p3f"],
     ] {

@@ -19,5 +19,6 @@ mod merge;
 mod p3f_reader;
 mod render;
 mod scale;
+mod scale_curve;
 mod simd;
 mod watertight;

@@ -1,0 +1,124 @@
+//! `scripts/scale-curve.py`: the protocol over generated scenes of growing size. The real
+//! `p3trace bench` runs on small levels; the anchors are stand-ins that answer with
+//! p3trace's own lines at a known fraction of its speed, so every ratio is known.
+
+use std::os::unix::fs::PermissionsExt;
+use std::path::Path;
+use std::process::{Command, Output};
+
+use crate::bench_chart::have_matplotlib;
+use crate::common::{project_file, scratch, stderr, stdout};
+
+/// A stand-in anchor: the lines of the p3trace result the script wrote just before for the
+/// same scene, renamed `NAME-best`, at 1/`divisor` of the speed, hits shifted by `extra`.
+fn stand_in(dir: &Path, name: &str, divisor: u32, extra: u32) -> String {
+    let path = dir.join(format!("{name}.sh"));
+    let script = format!(
+        r##"#!/bin/sh
+# usage: SCENE.p3f --threads 1 --reps N
+echo "# build_s 0.5 (quality medium, API names without a suffix)"
+echo "# build_s bvh8cpu 0.25 / 1.0, bvh4cpu 0.1 / 0.2"
+awk '$2 == "p3trace-best" {{ printf "%s {name}-best %s %s %d %s %.2f\n", $1, $3, $4, $5 + {extra}, $6, $7 / {divisor} }}' "${{1%.p3f}}.p3trace.txt"
+"##
+    );
+    std::fs::write(&path, script).unwrap();
+    std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755)).unwrap();
+    path.display().to_string()
+}
+
+/// The script with the flags `flags` (split at spaces) and the options `options`, each a
+/// flag and its value (a path, which may hold a space).
+fn curve(flags: &str, options: &[(&str, &str)]) -> Output {
+    Command::new("python3")
+        .arg(project_file("scripts/scale-curve.py"))
+        .args(flags.split_whitespace())
+        .args(options.iter().flat_map(|&(flag, value)| [flag, value]))
+        .output()
+        .expect("python3 runs")
+}
+
+#[test]
+fn the_curve_gives_each_scene_its_ratios_build_times_and_memory() {
+    if !have_matplotlib() {
+        return;
+    }
+    let dir = scratch("scale_curve");
+    let embree = stand_in(&dir, "embree", 2, 0);
+    let tinybvh = stand_in(&dir, "tinybvh", 4, 0);
+    let out = dir.display().to_string();
+    let plot = dir.join("curve.png");
+    let markdown = dir.join("curve.md");
+    let binary = env!("CARGO_BIN_EXE_p3trace");
+    let (plot_arg, markdown_arg) = (plot.display().to_string(), markdown.display().to_string());
+    let flags = "--mount 1-2 --balls 1 --reps 1";
+    let options = [
+        ("--dir", out.as_str()),
+        ("--embree", &embree),
+        ("--tinybvh", &tinybvh),
+        ("--plot", &plot_arg),
+        ("--markdown", &markdown_arg),
+    ];
+    let run = curve(flags, &[&options[..], &[("--p3trace", binary)]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let table = stdout(&run);
+    assert_eq!(std::fs::read_to_string(&markdown).unwrap(), table);
+    // Embree's stand-in runs at half p3trace's speed, tinybvh's (meshes only) at a quarter.
+    for (scene, primitives) in [("mount_1", "12"), ("mount_2", "36"), ("balls_1", "12")] {
+        let row =
+            format!("| {scene} | {primitives} | 2.00 (E) | 2.00 (E) | 2.00 (E) | 2.00 | 2.00 | ");
+        let line = table.lines().find(|l| l.starts_with(&row));
+        // Then p3trace's build time and Embree's, and their peak memory.
+        assert!(
+            line.is_some_and(|l| l.contains(" / 0.500 | ")),
+            "{row}\n{table}"
+        );
+    }
+    let figures: Vec<&str> = table
+        .lines()
+        .filter(|l| l.starts_with("| mount_2 | "))
+        .collect();
+    assert_eq!(figures.len(), 4, "{table}");
+    assert!(figures[2].starts_with("| mount_2 | embree | ") && figures[2].contains("| 0.500 |"));
+    assert!(figures[3].starts_with("| mount_2 | tinybvh | ") && figures[3].contains("| 0.250 |"));
+    assert!(
+        !table.contains("| balls_1 | tinybvh |"),
+        "tinybvh takes triangles only\n{table}"
+    );
+    // Each tracer's peak memory, in MiB: at least the protocol's million primary rays.
+    let peak: f64 = figures[1]
+        .rsplit('|')
+        .nth(1)
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    assert!(peak >= 16.0, "{table}");
+    assert!(std::fs::metadata(&plot).unwrap().len() > 10_000);
+
+    // --reuse reads the results kept in DIR and runs nothing: not even the binary.
+    std::fs::remove_file(&plot).unwrap();
+    let missing = [("--p3trace", "/nonexistent/p3trace")];
+    let run = curve(
+        &format!("{flags} --reuse"),
+        &[&options[..], &missing].concat(),
+    );
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert_eq!(stdout(&run), table);
+    assert!(plot.exists());
+
+    // An anchor whose hits differ by more than 0.05% of them: the tables, then exit 1.
+    let wrong = stand_in(&dir, "embree", 2, 5000);
+    let options = [
+        ("--dir", out.as_str()),
+        ("--embree", &wrong),
+        ("--tinybvh", ""),
+        ("--p3trace", binary),
+    ];
+    let run = curve("--no-balls --mount 1 --reps 1", &options);
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    assert!(
+        stderr(&run).contains("disagree on mount_1 primary, mount_1 shadow, mount_1 reflection"),
+        "{}",
+        stderr(&run)
+    );
+}
