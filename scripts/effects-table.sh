@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The distribution effects' render times (BENCHMARKS.md sums them up): the course scenes at
+# The distribution effects' render times (docs/effects.md sums them up): the course scenes at
 # 16 samples per pixel, at their own resolution with the SAH BVH (the files say accel 0),
 # with each distribution effect on in turn, on 1 and 2 threads.
 # Usage: scripts/effects-table.sh [SHARED_DIR]   (default ../shared)
