@@ -56,13 +56,13 @@ pub enum Command {
     /// Write one of the project's generated scenes as P3F, or its procedural skybox.
     #[command(subcommand)]
     Gen(GenCommand),
-    /// Print the completion script for SHELL (the README says where to put it).
+    /// Print the completion script for SHELL (docs/usage.md#install says where to put it).
     Completions {
         /// The shell that will read the script.
         #[arg(value_enum)]
         shell: clap_complete::Shell,
     },
-    /// Print the man page, in roff (the README says where to put it).
+    /// Print the man page, in roff (docs/usage.md#install says where to put it).
     Man,
 }
 

@@ -50,6 +50,13 @@ fn help_explains_every_flag() {
     for command in ["render", "info", "compare", "merge", "completions", "man"] {
         assert!(top.contains(command));
     }
+    // Where to put the completion scripts and the man page: the page that says it.
+    for command in ["completions", "man"] {
+        let help = stdout(&p3trace(&[command, "--help"]));
+        assert!(help.contains("docs/usage.md#install"), "{command}: {help}");
+    }
+    let usage = std::fs::read_to_string(common::project_file("docs/usage.md")).unwrap();
+    assert!(usage.contains("\n## Install\n") && usage.contains("p3trace completions bash"));
 }
 
 #[test]
