@@ -308,8 +308,9 @@ pub struct RenderArgs {
     #[arg(long, value_name = "MODE", value_parser = one_of(MODES), default_value = "stream")]
     pub mode: RenderMode,
     /// No progress and no closing statistics line (warnings still go to stderr). Without
-    /// it, progress shows as a bar on a terminal, and elsewhere (a log, CI) as a plain
-    /// line at every tenth of the tiles and at least every 10 s.
+    /// it, progress shows as a bar on a terminal, and elsewhere (a log, CI), for a render
+    /// that lasts more than 3 s, as a plain line at every tenth of the tiles, at most every
+    /// 3 s and at least every 10 s.
     #[arg(short, long)]
     pub quiet: bool,
     /// Also print the structure's build time and statistics, and the traversal work of
