@@ -619,7 +619,11 @@ impl<'a> Parser<'a> {
             }
             other => {
                 self.directive = None;
-                return Err(self.error_token(token, format!("unknown directive '{other}'")));
+                let message = match nearest_directive(other) {
+                    Some(known) => format!("unknown directive '{other}'; did you mean '{known}'?"),
+                    None => format!("unknown directive '{other}'"),
+                };
+                return Err(self.error_token(token, message));
             }
         }
         Ok(())
@@ -767,4 +771,25 @@ impl CameraSpec {
 /// Convenience for tests and generators: a scene from P3F text with no file behind it.
 pub fn parse_text(text: &str) -> Result<Scene> {
     parse_str(text, "<text>", Path::new(""))
+}
+
+/// Every directive [`Parser::directive`] knows.
+const DIRECTIVES: [&str; 17] = [
+    "accel", "spp", "bclr", "env", "v", "l", "al", "f", "s", "ms", "sm", "pl", "p", "pp", "mesh",
+    "box", "c",
+];
+
+/// The known directive nearest to `unknown` by edit distance (a transposition counting
+/// one), where it is a likely typo: at most two edits, changing fewer than half the
+/// letters of the longer of the two (so `x` suggests neither `v` nor `box`). Of two as
+/// near, the longer name, whose letters the edits change the smaller share of (`msh` is
+/// `mesh`, not `ms`).
+fn nearest_directive(unknown: &str) -> Option<&'static str> {
+    let letters = |word: &str| word.chars().count();
+    DIRECTIVES
+        .iter()
+        .map(|&known| (strsim::damerau_levenshtein(unknown, known), known))
+        .filter(|&(edits, known)| edits <= 2 && 2 * edits < letters(unknown).max(letters(known)))
+        .min_by_key(|&(edits, known)| (edits, std::cmp::Reverse(known.len())))
+        .map(|(_, known)| known)
 }

@@ -113,6 +113,31 @@ fn object_before_any_material_gets_the_default_with_a_warning() {
     assert_eq!((scene.warnings[0].line, scene.warnings[0].column), (1, 1));
 }
 
+/// A typo in a directive's name is answered with the name meant, where one is near
+/// enough to be likely; a word that is no directive at all gets no guess.
+#[test]
+fn an_unknown_directive_suggests_the_nearest_known_one() {
+    for (typo, meant) in [
+        ("bclor", "bclr"),
+        ("acel", "accel"),
+        ("evn", "env"),
+        ("msh", "mesh"),
+        ("sppp", "spp"),
+        ("boxx", "box"),
+    ] {
+        assert_eq!(
+            error_of(&format!("{typo} 1 2 3\n")),
+            format!("<text>:1:1: unknown directive '{typo}'; did you mean '{meant}'?")
+        );
+    }
+    for word in ["sphere", "x", "xy", "camera", "light"] {
+        assert_eq!(
+            error_of(&format!("{word} 1\n")),
+            format!("<text>:1:1: unknown directive '{word}'")
+        );
+    }
+}
+
 #[test]
 fn errors_name_file_line_column_and_directive() {
     assert_eq!(
