@@ -1,7 +1,8 @@
 /* The CPU check of p3trace, in C so that it is compiled for the plain x86-64 baseline.
  * The Rust code is compiled for the CPU that builds it (.cargo/config.toml: target-cpu
  * native); a check written in Rust would itself use those instructions (BMI2's shrx, AVX
- * moves) before it could say why it stops. `main` calls it first. */
+ * moves) before it could say why it stops. The binary runs it before any of its own code
+ * (main.rs puts it in `.preinit_array`). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>

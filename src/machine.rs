@@ -1,5 +1,5 @@
 //! The machine: what this binary was built for (version, commit, instruction set) and
-//! what the CPU it runs on offers. `main` checks the CPU before anything else, by
+//! what the CPU it runs on offers. The binary checks the CPU before anything else, by
 //! `src/cpu_check.c`, which `build.rs` compiles for the plain x86-64 baseline: a check in
 //! Rust, compiled for the building CPU, would use the instructions it checks for before it
 //! could say why it stops. `build.rs` also records the commit and the target's CPU and
