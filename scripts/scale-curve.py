@@ -87,13 +87,14 @@ def parse(tracer, text, where):
         fields = line.split()
         if len(fields) == 7 and fields[1] == f"{tracer}-best" and fields[2] == "1":
             result["sets"][fields[0]] = {
+                "rays": int(fields[3]),
                 "hits": int(fields[4]),
                 "tsum": float(fields[5]),
                 "mrays": float(fields[6]),
             }
         elif tracer == "p3trace" and (m := re.match(r"# structure .*build_s ([0-9.]+)", line)):
             result["build_s"] = float(m[1])
-        elif tracer == "p3trace" and (m := re.match(r"# geometry (\d+) bounded objects, (\d+) planes", line)):
+        elif tracer == "p3trace" and (m := re.match(r"# geometry (\d+) bounded objects?, (\d+) planes?", line)):
             result["primitives"] = int(m[1]) + int(m[2])
         elif tracer == "embree" and (m := re.match(r"# build_s ([0-9.]+) \(quality medium", line)):
             result["build_s"] = float(m[1])
@@ -108,10 +109,11 @@ def parse(tracer, text, where):
 
 
 def agree(ours, theirs):
-    """PROTOCOL.md's agreement rule for one set."""
-    rays_ok = abs(ours["hits"] - theirs["hits"]) <= 0.0005 * max(ours["hits"], theirs["hits"], 1)
+    """PROTOCOL.md's agreement rule for one set: hits within 0.05% of the rays, tsums
+    within 0.05% of each other."""
+    hits_ok = abs(ours["hits"] - theirs["hits"]) <= 0.0005 * ours["rays"]
     tsum_ok = abs(ours["tsum"] - theirs["tsum"]) <= 0.0005 * abs(theirs["tsum"])
-    return rays_ok and tsum_ok
+    return hits_ok and tsum_ok
 
 
 def measure(args, family, size):
