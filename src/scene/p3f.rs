@@ -190,6 +190,8 @@ struct Lexer<'a> {
     pos: usize,
     line: u32,
     line_start: usize,
+    /// Line and column just past the token before the last one read.
+    before_last: (u32, u32),
 }
 
 impl<'a> Lexer<'a> {
@@ -199,6 +201,7 @@ impl<'a> Lexer<'a> {
             pos: 0,
             line: 1,
             line_start: 0,
+            before_last: (1, 1),
         }
     }
 
@@ -223,6 +226,7 @@ impl<'a> Lexer<'a> {
     }
 
     fn next(&mut self) -> Option<Token<'a>> {
+        self.before_last = self.position();
         self.skip_blanks();
         let bytes = self.text.as_bytes();
         if self.pos >= bytes.len() {
@@ -351,10 +355,7 @@ impl<'a> Parser<'a> {
                 token,
                 format!("{what} must be a finite number, found '{}'", token.text),
             )),
-            Err(_) => Err(self.error_token(
-                token,
-                format!("expected {what} (a number), found '{}'", token.text),
-            )),
+            Err(_) => Err(self.not_a_number(token, &format!("{what} (a number)"))),
         }
     }
 
@@ -386,10 +387,24 @@ impl<'a> Parser<'a> {
         let token = self.token(what)?;
         match token.text.parse::<i64>() {
             Ok(n) => Ok((n, token)),
-            Err(_) => Err(self.error_token(
-                token,
-                format!("expected {what} (a whole number), found '{}'", token.text),
-            )),
+            Err(_) => Err(self.not_a_number(token, &format!("{what} (a whole number)"))),
+        }
+    }
+
+    /// The error for `token`, read where `expected` was. A word on a later line than the
+    /// values before it means a value is missing at the end of those: the error points
+    /// there (the word most often starts the next directive), not at the word.
+    fn not_a_number(&self, token: Token, expected: &str) -> ParseError {
+        let (line, column) = self.lexer.before_last;
+        if token.line > line {
+            let found = format!(
+                "the end of the line ('{}' follows on line {})",
+                token.text, token.line
+            );
+            self.error_at(line, column, format!("expected {expected}, found {found}"))
+        } else {
+            let found = format!("'{}'", token.text);
+            self.error_token(token, format!("expected {expected}, found {found}"))
         }
     }
 

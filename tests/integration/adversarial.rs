@@ -121,8 +121,8 @@ const BAD_SCENES: &[(&str, &str, (u32, u32), &str)] = &[
     (
         "directive cut by the next one",
         "f 1 1 1\ns 0 0 0 1",
-        (3, 1),
-        "expected Kd (a number), found 's'",
+        (2, 8),
+        "expected Kd (a number), found the end of the line ('s' follows on line 3)",
     ),
     (
         "negative radius",

@@ -138,6 +138,33 @@ fn an_unknown_directive_suggests_the_nearest_known_one() {
     }
 }
 
+/// A value missing at the end of a line is reported there, where the directive's values
+/// end, not at the next line's word (most often the next directive); a word on the
+/// directive's own line is reported where it is.
+#[test]
+fn a_missing_value_is_reported_where_the_values_end() {
+    assert_eq!(
+        error_of("l 0 0 0 1 1\nl 1 1 1 1 1 1\n"),
+        "<text>:1:12: in 'l': expected a light colour component (a number), \
+         found the end of the line ('l' follows on line 2)"
+    );
+    // Values that run over lines (a triangle's vertices, as the course files write them).
+    assert_eq!(
+        error_of("p 3\n0 0 0\n1 0 0\n0 1\ns 0 0 0 1\n"),
+        "<text>:4:4: in 'p': expected a vertex coordinate (a number), \
+         found the end of the line ('s' follows on line 5)"
+    );
+    assert_eq!(
+        error_of("accel\n\ns 0 0 0 1\n"),
+        "<text>:1:6: in 'accel': expected the accelerator (0, 1 or 2) (a whole number), \
+         found the end of the line ('s' follows on line 3)"
+    );
+    assert_eq!(
+        error_of("l 0 0 0 1 x 1\n"),
+        "<text>:1:11: in 'l': expected a light colour component (a number), found 'x'"
+    );
+}
+
 #[test]
 fn errors_name_file_line_column_and_directive() {
     assert_eq!(
