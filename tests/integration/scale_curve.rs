@@ -108,23 +108,19 @@ fn the_curve_gives_each_scene_its_ratios_build_times_and_memory() {
 
     // Hits that differ by 100, within 0.05% of the rays (not of mount_1's 21,928 blocked
     // shadow rays): they agree. By 5,000, beyond it: the tables, then exit 1.
-    let near = stand_in(&dir, "embree", 2, 100);
-    let options = [
-        ("--dir", out.as_str()),
-        ("--embree", &near),
-        ("--tinybvh", ""),
-        ("--p3trace", binary),
-    ];
-    let run = curve("--no-balls --mount 1 --reps 1", &options);
+    let against = |extra: u32| {
+        let embree = stand_in(&dir, "embree", 2, extra);
+        let options = [
+            ("--dir", out.as_str()),
+            ("--embree", &embree),
+            ("--tinybvh", ""),
+            ("--p3trace", binary),
+        ];
+        curve("--no-balls --mount 1 --reps 1", &options)
+    };
+    let run = against(100);
     assert!(run.status.success(), "{}", stderr(&run));
-    let wrong = stand_in(&dir, "embree", 2, 5000);
-    let options = [
-        ("--dir", out.as_str()),
-        ("--embree", &wrong),
-        ("--tinybvh", ""),
-        ("--p3trace", binary),
-    ];
-    let run = curve("--no-balls --mount 1 --reps 1", &options);
+    let run = against(5000);
     assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
     assert!(
         stderr(&run).contains("disagree on mount_1 primary, mount_1 shadow, mount_1 reflection"),
