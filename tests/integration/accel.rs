@@ -20,7 +20,7 @@ use p3trace::simd::{Bits, F32x8, LaneBits, Vec3x8, PACKET};
 use proptest::prelude::*;
 
 /// Every structure and option the renderer can run, but brute force.
-fn structures() -> Vec<AccelOptions> {
+pub(crate) fn structures() -> Vec<AccelOptions> {
     let base = AccelOptions {
         shutter: [0.0, 1.0],
         ..AccelOptions::default()

@@ -10,7 +10,7 @@ use bumpalo::Bump;
 use glam::{Quat, Vec3};
 use p3trace::accel::count::NoCount;
 use p3trace::accel::stream::{self, Occlusions};
-use p3trace::accel::{AccelKind, AccelOptions, BvhBuild, BvhWidth, Tracer};
+use p3trace::accel::{AccelOptions, Tracer};
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::RenderMode;
 use p3trace::scene::p3f::parse_text;
@@ -386,23 +386,9 @@ fn rays(mesh: &Mesh, aims: &[Aim]) -> Vec<(Ray, f32)> {
 
 /// Every structure the renderer can run, brute force first.
 fn structures() -> Vec<AccelOptions> {
-    let bvh = |bvh, width| AccelOptions {
-        kind: AccelKind::Bvh,
-        bvh,
-        bvh_width: Some(width),
-        ..AccelOptions::default()
-    };
-    vec![
-        AccelOptions::brute_force(),
-        AccelOptions {
-            kind: AccelKind::Grid,
-            ..AccelOptions::default()
-        },
-        bvh(BvhBuild::Midpoint, BvhWidth::Two),
-        bvh(BvhBuild::Sah, BvhWidth::Two),
-        bvh(BvhBuild::Sah, BvhWidth::Eight),
-        bvh(BvhBuild::Midpoint, BvhWidth::Eight),
-    ]
+    let mut all = vec![AccelOptions::brute_force()];
+    all.extend(crate::accel::structures());
+    all
 }
 
 /// Every ray of `rays` meets the mesh of `geometry` before its target, in every structure:
