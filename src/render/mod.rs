@@ -24,6 +24,9 @@ pub mod skybox;
 mod stream;
 
 use std::cell::RefCell;
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use bumpalo::collections::Vec as ArenaVec;
@@ -35,7 +38,7 @@ use crate::accel::count::{Count, NoCount, Tally};
 use crate::accel::{AccelKind, AccelOptions, Tracer};
 use crate::intersect::IntersectOptions;
 use crate::limits::{check_image_size, MAX_SPP_SIDE};
-use crate::scene::Scene;
+use crate::scene::{CameraSpec, Scene};
 use crate::simd::PACKET;
 use camera::{Camera, FilmSample};
 use film::Film;
@@ -132,7 +135,18 @@ pub struct RenderOptions {
     /// Count the walks' work, pixel by pixel (`accel::count`: the walks built to count,
     /// a little slower).
     pub count: bool,
+    /// The samples of each pixel to trace, by their place in the grid's order (row `q`,
+    /// column `p`: `q * columns + p`); `None` is all. The film holds their mean, so a
+    /// viewer that adds one sample's films in order, then divides by the grid's cells,
+    /// has the whole render's pixels bit for bit.
+    pub samples: Option<Range<u32>>,
+    /// Once set, the render skips the tiles it has not begun and returns
+    /// [`STOPPED`]: a viewer's frame made stale by the mouse.
+    pub stop: Option<Arc<AtomicBool>>,
 }
+
+/// The error of a render that its `stop` flag ended.
+pub const STOPPED: &str = "the render was stopped";
 
 /// The shutter of the course's code, used when a scene has moving spheres.
 pub const DEFAULT_SHUTTER: [f32; 2] = [0.0, 0.3];
@@ -161,6 +175,17 @@ impl RenderOptions {
             },
             region: None,
             count: false,
+            samples: None,
+            stop: None,
+        }
+    }
+
+    /// The samples of each pixel that the render traces (see `samples`), within the grid.
+    pub fn traced_samples(&self) -> Range<u32> {
+        let cells = self.sampling.samples_per_pixel();
+        match &self.samples {
+            Some(range) => range.start.min(cells)..range.end.min(cells),
+            None => 0..cells,
         }
     }
 
@@ -170,8 +195,8 @@ impl RenderOptions {
             .unwrap_or_else(|| Region::full(self.width, self.height))
     }
 
-    /// Refuses images too large to hold in memory, saying how much they would need, and
-    /// regions that reach outside the image.
+    /// Refuses images too large to hold in memory, saying how much they would need,
+    /// regions that reach outside the image, and an empty choice of samples.
     pub fn check_size(&self) -> Result<(), String> {
         check_image_size(self.width, self.height)?;
         let r = self.region();
@@ -179,6 +204,13 @@ impl RenderOptions {
             return Err(format!(
                 "the region {},{},{},{} is empty or outside the {}x{} image",
                 r.x0, r.x1, r.y0, r.y1, self.width, self.height
+            ));
+        }
+        if self.traced_samples().is_empty() {
+            return Err(format!(
+                "no samples to trace: {:?} of a pixel's {}",
+                self.samples,
+                self.sampling.samples_per_pixel()
             ));
         }
         Ok(())
@@ -228,122 +260,172 @@ impl RenderWork {
 /// Renders `scene` with the structure `options.accel` asks for.
 pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, String> {
     options.check_size()?;
-    let mut warnings = Vec::new();
-    // Moving spheres are bounded over the whole shutter, and spheres are tested as the
-    // profile says (the course's renderer solved the textbook quadratic).
-    let accel_options = AccelOptions {
-        shutter: options.shutter,
-        intersect: IntersectOptions {
-            sphere_roots: options.shade.profile.sphere_roots(),
-            ..IntersectOptions::default()
-        },
-        ..options.accel
-    };
-    // The skybox decodes while the structure is built: both use rayon's threads.
-    let (skybox, tracer) = rayon::join(
-        || match (&scene.skybox, options.skybox) {
-            (Some(dir), true) => Some(Skybox::load(dir)),
-            _ => None,
-        },
-        || {
-            let tracer = Tracer::new(&scene.geometry, &accel_options);
-            match options.mode {
-                // Only the stream renderer asks the spheres (`accel::interior`).
-                RenderMode::Stream => {
-                    tracer.with_rooms(|m| scene.materials[m as usize].transmittance > 0.0)
+    let stage = Stage::new(scene, options);
+    let mut report = stage.render(&scene.camera, options)?;
+    report.warnings = stage.warnings;
+    Ok(report)
+}
+
+/// A scene ready to render frame after frame: its structure built and its skybox loaded,
+/// as `options` asked when it was made (structure, shutter, profile, mode).
+pub struct Stage<'s> {
+    scene: &'s Scene,
+    tracer: Tracer<'s>,
+    skybox: Option<Skybox>,
+    /// What loading the skybox found wrong.
+    pub warnings: Vec<String>,
+}
+
+impl<'s> Stage<'s> {
+    /// Builds the structure and loads the skybox side by side, on rayon's threads.
+    pub fn new(scene: &'s Scene, options: &RenderOptions) -> Self {
+        let mut warnings = Vec::new();
+        // Moving spheres are bounded over the whole shutter, and spheres are tested as the
+        // profile says (the course's renderer solved the textbook quadratic).
+        let accel_options = AccelOptions {
+            shutter: options.shutter,
+            intersect: IntersectOptions {
+                sphere_roots: options.shade.profile.sphere_roots(),
+                ..IntersectOptions::default()
+            },
+            ..options.accel
+        };
+        let (skybox, tracer) = rayon::join(
+            || match (&scene.skybox, options.skybox) {
+                (Some(dir), true) => Some(Skybox::load(dir)),
+                _ => None,
+            },
+            || {
+                let tracer = Tracer::new(&scene.geometry, &accel_options);
+                match options.mode {
+                    // Only the stream renderer asks the spheres (`accel::interior`).
+                    RenderMode::Stream => {
+                        tracer.with_rooms(|m| scene.materials[m as usize].transmittance > 0.0)
+                    }
+                    RenderMode::Scalar => tracer,
                 }
-                RenderMode::Scalar => tracer,
+            },
+        );
+        let skybox = match skybox {
+            Some(Ok(sky)) => {
+                warnings.extend(sky.damaged().iter().map(|face| {
+                    format!(
+                        "damaged skybox face {face}: it is drawn as far as it decodes \
+                         (a copy whose line endings were converted has lost bytes)"
+                    )
+                }));
+                Some(sky)
             }
-        },
-    );
-    let skybox = match skybox {
-        Some(Ok(sky)) => {
-            warnings.extend(sky.damaged().iter().map(|face| {
-                format!(
-                    "damaged skybox face {face}: it is drawn as far as it decodes \
-                     (a copy whose line endings were converted has lost bytes)"
+            Some(Err(e)) => {
+                warnings.push(format!(
+                    "skybox not loaded ({e}); the background colour is used instead"
+                ));
+                None
+            }
+            None => None,
+        };
+        Stage {
+            scene,
+            tracer,
+            skybox,
+            warnings,
+        }
+    }
+
+    /// Renders the scene seen by `camera` as `options` says; its structure, shutter,
+    /// profile and mode are the ones the stage was made with. The report's warnings are
+    /// left empty: they are the stage's.
+    pub fn render(
+        &self,
+        camera: &CameraSpec,
+        options: &RenderOptions,
+    ) -> Result<RenderReport, String> {
+        options.check_size()?;
+        let tracer = &self.tracer;
+        let (accel_name, accel_stats) = (tracer.name(), tracer.stats());
+        let build_time = tracer.build_time();
+        let jittered = matches!(options.sampling, Sampling::Jittered(_));
+        let shader = Shader::new(
+            self.scene,
+            tracer,
+            self.skybox.as_ref(),
+            options.shade,
+            jittered,
+        );
+        let camera = Camera::new(camera, options.width, options.height);
+
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(options.threads.unwrap_or(0))
+            .build()
+            .map_err(|e| format!("cannot start the worker threads: {e}"))?;
+        let region = options.region();
+        // A counted render traces the whole frame's tiles that meet its region, in full: a
+        // tile's packets, and so its pixels' counts, are then the whole frame's.
+        let traced = match options.count {
+            true => whole_tiles(region, options.width, options.height),
+            false => region,
+        };
+        let tiles = tiles(traced, options.height);
+        let progress = Meter::new(options.progress, tiles.len());
+        let start = Instant::now();
+        // Each tile writes its own block of these buffers: no allocation per tile.
+        let block = (TILE * TILE) as usize;
+        let mut tile_pixels = vec![Vec3::ZERO; tiles.len() * block];
+        let frame = Frame {
+            shader: &shader,
+            camera: &camera,
+            options,
+            tiles: &tiles,
+            progress: &progress,
+        };
+        let (rays, work) = match options.count {
+            false => {
+                let mut work = vec![Work::<NoCount>::default(); tiles.len() * block];
+                (
+                    pool.install(|| frame.trace(&mut tile_pixels, &mut work)),
+                    None,
                 )
-            }));
-            Some(sky)
+            }
+            true => {
+                let mut work = vec![Work::<Tally>::default(); tiles.len() * block];
+                let rays = pool.install(|| frame.trace(&mut tile_pixels, &mut work));
+                let mut pixels = vec![Work::default(); region.pixels() as usize];
+                place(&tiles, &work, region, options.height, &mut pixels);
+                (rays, Some(RenderWork { pixels }))
+            }
+        };
+        let elapsed = start.elapsed();
+        progress.finish();
+        if options
+            .stop
+            .as_ref()
+            .is_some_and(|s| s.load(Ordering::Relaxed))
+        {
+            return Err(STOPPED.into());
         }
-        Some(Err(e)) => {
-            warnings.push(format!(
-                "skybox not loaded ({e}); the background colour is used instead"
-            ));
-            None
-        }
-        None => None,
-    };
-    let (accel_name, accel_stats) = (tracer.name(), tracer.stats());
-    let build_time = tracer.build_time();
-    let jittered = matches!(options.sampling, Sampling::Jittered(_));
-    let shader = Shader::new(scene, &tracer, skybox.as_ref(), options.shade, jittered);
-    let camera = Camera::new(&scene.camera, options.width, options.height);
+        let threads = pool.current_num_threads();
 
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(options.threads.unwrap_or(0))
-        .build()
-        .map_err(|e| format!("cannot start the worker threads: {e}"))?;
-    let region = options.region();
-    // A counted render traces the whole frame's tiles that meet its region, in full: a
-    // tile's packets, and so its pixels' counts, are then the whole frame's.
-    let traced = match options.count {
-        true => whole_tiles(region, options.width, options.height),
-        false => region,
-    };
-    let tiles = tiles(traced, options.height);
-    let progress = Meter::new(options.progress, tiles.len());
-    let start = Instant::now();
-    // Each tile writes its own block of these buffers: no allocation per tile.
-    let block = (TILE * TILE) as usize;
-    let mut tile_pixels = vec![Vec3::ZERO; tiles.len() * block];
-    let frame = Frame {
-        shader: &shader,
-        camera: &camera,
-        options,
-        tiles: &tiles,
-        progress: &progress,
-    };
-    let (rays, work) = match options.count {
-        false => {
-            let mut work = vec![Work::<NoCount>::default(); tiles.len() * block];
-            (
-                pool.install(|| frame.trace(&mut tile_pixels, &mut work)),
-                None,
-            )
-        }
-        true => {
-            let mut work = vec![Work::<Tally>::default(); tiles.len() * block];
-            let rays = pool.install(|| frame.trace(&mut tile_pixels, &mut work));
-            let mut pixels = vec![Work::default(); region.pixels() as usize];
-            place(&tiles, &work, region, options.height, &mut pixels);
-            (rays, Some(RenderWork { pixels }))
-        }
-    };
-    let elapsed = start.elapsed();
-    progress.finish();
-    let threads = pool.current_num_threads();
-
-    let mut film = Film::new(region.width(), region.height());
-    place(
-        &tiles,
-        &tile_pixels,
-        region,
-        options.height,
-        &mut film.pixels,
-    );
-    Ok(RenderReport {
-        film,
-        rays,
-        elapsed,
-        threads,
-        build_time,
-        accel_name,
-        accel_stats,
-        skybox: skybox.is_some(),
-        warnings,
-        work,
-    })
+        let mut film = Film::new(region.width(), region.height());
+        place(
+            &tiles,
+            &tile_pixels,
+            region,
+            options.height,
+            &mut film.pixels,
+        );
+        Ok(RenderReport {
+            film,
+            rays,
+            elapsed,
+            threads,
+            build_time,
+            accel_name,
+            accel_stats,
+            skybox: self.skybox.is_some(),
+            warnings: Vec::new(),
+            work,
+        })
+    }
 }
 
 /// What every tile of a frame shares.
@@ -365,6 +447,11 @@ impl Frame<'_> {
             .zip(work.par_chunks_mut(block))
             .zip(self.tiles.par_iter())
             .map(|((pixels, work), &tile)| {
+                if let Some(stop) = &self.options.stop {
+                    if stop.load(Ordering::Relaxed) {
+                        return RayCounts::default();
+                    }
+                }
                 let rays = render_tile(self.shader, self.camera, self.options, tile, pixels, work);
                 self.progress.tile_done();
                 rays
@@ -514,7 +601,7 @@ fn render_tile<C: Count>(
             &mut rays,
         )
     });
-    let samples = grid.cells() as f32;
+    let samples = options.traced_samples().len() as f32;
     for pixel in sums.iter_mut() {
         *pixel /= samples;
     }
@@ -537,6 +624,7 @@ fn trace_tile<C: Count>(
     (sums, work): (&mut [Vec3], &mut [Work<C>]),
     rays: &mut RayCounts,
 ) {
+    let traced = options.traced_samples();
     match options.mode {
         RenderMode::Scalar => {
             for (i, (sum, pixel_work)) in sums.iter_mut().zip(work.iter_mut()).enumerate() {
@@ -544,13 +632,11 @@ fn trace_tile<C: Count>(
                     tile.x + i as u32 % tile.width,
                     tile.y + i as u32 / tile.width,
                 );
-                for q in 0..grid.rows {
-                    for p in 0..grid.columns {
-                        let (film, sample) = film_sample(x, y, p, q);
-                        let ray = camera.ray(&film);
-                        let counts = (&mut *rays, &mut *pixel_work);
-                        *sum += shader.trace(&ray, RayKind::Primary, &sample, 1, 1.0, counts);
-                    }
+                for (p, q) in grid.cells_in(traced.clone()) {
+                    let (film, sample) = film_sample(x, y, p, q);
+                    let ray = camera.ray(&film);
+                    let counts = (&mut *rays, &mut *pixel_work);
+                    *sum += shader.trace(&ray, RayKind::Primary, &sample, 1, 1.0, counts);
                 }
             }
         }
@@ -573,17 +659,15 @@ fn trace_tile<C: Count>(
             }
             // Each pixel's samples in their order, traced a batch of pixels at a time, each
             // batch's queues in the arena anew: a whole tile's at 16 spp outgrow the cache.
-            let pixels_per_batch = (BATCH_SAMPLES / grid.cells() as usize).max(1);
+            let pixels_per_batch = (BATCH_SAMPLES / traced.len()).max(1);
             for batch in order[..pixels].chunks(pixels_per_batch) {
                 arena.reset();
-                let capacity = batch.len() * grid.cells() as usize;
+                let capacity = batch.len() * traced.len();
                 let mut gathered = ArenaVec::with_capacity_in(capacity, arena);
                 for &(x, y) in batch {
-                    for q in 0..grid.rows {
-                        for p in 0..grid.columns {
-                            let (film, sample) = film_sample(tile.x + x, tile.y + y, p, q);
-                            gathered.push((film, sample, y * tile.width + x));
-                        }
+                    for (p, q) in grid.cells_in(traced.clone()) {
+                        let (film, sample) = film_sample(tile.x + x, tile.y + y, p, q);
+                        gathered.push((film, sample, y * tile.width + x));
                     }
                 }
                 // Their rays eight at a time; a short last chunk repeats its first sample.

@@ -104,6 +104,12 @@ impl SampleGrid {
     pub fn cells(self) -> u32 {
         self.columns * self.rows
     }
+
+    /// The cells `(p, q)` whose places in the grid's order (row by row: `q * columns + p`)
+    /// are in `places`, in that order.
+    pub fn cells_in(self, places: std::ops::Range<u32>) -> impl Iterator<Item = (u32, u32)> {
+        places.map(move |k| (k % self.columns, k / self.columns))
+    }
 }
 
 /// The random state of one primary sample and of the rays it spawns.
