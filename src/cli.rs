@@ -36,6 +36,21 @@ pub struct Cli {
 pub enum Command {
     /// Render a P3F scene to an image.
     Render(RenderArgs),
+    /// Show a scene in a window, rendered again as the mouse moves the camera, as the
+    /// course's own program does: small frames while it moves, then full passes, one
+    /// sample of each pixel's grid a pass, until the image is `render`'s with the same
+    /// camera and flags, byte for byte. Left drag orbits about the camera's `at`, keeping
+    /// its up vector; right drag and the wheel move the eye along the view direction. Keys:
+    /// r the file's camera again; c print the camera as a `v` block to paste into the
+    /// file; s save the image shown as SCENE.png (SCENE-1.png, ... never overwriting);
+    /// b, g, n the BVH, the grid, brute force (the title shows each one's frame time);
+    /// k the cost image (nodes visited, grid cells, primitives tested: `render --cost`)
+    /// in place of the colours; e the scene's effects off and on (lens, soft lights,
+    /// fuzzy reflections, motion blur); Esc or q quit. The scene file and its skybox are
+    /// read again when they change on disk; a scene that no longer parses keeps the last
+    /// image and shows its error. Needs a display (X11 or Wayland, or SSH with X
+    /// forwarding): without DISPLAY or WAYLAND_DISPLAY it exits 1 at once.
+    View(ViewArgs),
     /// Print what a scene holds (objects by kind, materials, lights, camera) and the
     /// statistics of its acceleration structure, built as `render` builds it (the same
     /// lines as `render --stats` with the same --profile and structure flags).
@@ -230,6 +245,66 @@ pub struct RenderArgs {
     /// it as .exr for `p3trace merge`, which names the missing tiles of a frame.
     #[arg(long, value_name = "I/N", group = "region", allow_hyphen_values = true)]
     pub tile: Option<TileIndex>,
+    #[command(flatten)]
+    pub settings: Settings,
+    /// No progress and no closing statistics line (warnings still go to stderr). Without
+    /// it, progress shows as a bar on a terminal, and elsewhere (a log, CI), for a render
+    /// that lasts more than 3 s, as a plain line at every tenth of the tiles, at most every
+    /// 3 s and at least every 10 s.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Also print the structure's build time and statistics, and the traversal work of
+    /// the frame's rays by kind (primary, shadow, reflection, refraction): the interior
+    /// nodes visited, child boxes tested, leaves entered, primitives tested (planes
+    /// included) and grid cells visited, in all and per ray. Counting runs the walks built
+    /// to count, which take a little longer than the plain ones: time renders without
+    /// --stats. With --quiet, only these lines.
+    #[arg(long)]
+    pub stats: bool,
+    /// Write a cost image instead of the colours: each pixel's count of COUNTER over all
+    /// its samples' rays (see --cost-rays): nodes (interior nodes visited), boxes (child
+    /// boxes tested), leaves (leaves entered), prims (primitives tested, planes included)
+    /// or cells (grid cells visited, --accel grid). A .png or .ppm output shows the counts
+    /// on the viridis scale (0 dark purple, the top of the scale yellow) with a colour bar
+    /// and its counts drawn beside the image; an .exr output keeps the raw counts as one
+    /// float channel, Y, which `merge` joins as it joins colour parts and `compare`
+    /// compares as counts. A counter the structure never counts is refused.
+    #[arg(long, value_name = "COUNTER", value_parser = one_of(COUNTERS))]
+    pub cost: Option<Counter>,
+    /// The rays a cost image counts: all (the primary rays and every ray they spawn,
+    /// shadow rays included) or primary (the primary rays alone).
+    #[arg(long, value_name = "RAYS", value_parser = one_of(COST_RAYS), default_value = "all",
+          requires = "cost")]
+    pub cost_rays: CostRays,
+    /// The count at the top of a cost picture's scale (larger counts take its colour, and
+    /// its label gets a +), so that pictures of two structures share one scale. Default:
+    /// the 99th percentile of the image's counts.
+    #[arg(long, value_name = "N", value_parser = parse_cost_max, requires = "cost",
+          allow_negative_numbers = true)]
+    pub cost_max: Option<f32>,
+    /// How a cost picture's colours follow the counts: linear, or log (the logarithm of
+    /// 1 + the count, for structures whose counts differ tenfold on one scale).
+    #[arg(long, value_name = "SCALE", value_parser = one_of(COST_SCALES),
+          default_value = "linear", requires = "cost", action = clap::ArgAction::Set)]
+    pub cost_scale: bool,
+    /// Write the run's statistics as one JSON object to FILE, or to standard output for
+    /// `-` (the closing line then goes to stderr): version, commit, CPU, scene, size,
+    /// samples, structure, build and render seconds, rays by kind, Mrays/s.
+    #[arg(long, value_name = "FILE|-")]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+pub struct ViewArgs {
+    #[arg(help = SCENE_HELP)]
+    pub scene: PathBuf,
+    #[command(flatten)]
+    pub settings: Settings,
+}
+
+/// What the image looks like: the flags `render` and `view` share.
+#[derive(Args, Debug)]
+pub struct Settings {
     /// Image size, overriding the scene's `resolution` (for example 1024x768).
     #[arg(long, value_name = "WxH", value_parser = parse_resolution, allow_hyphen_values = true)]
     pub resolution: Option<(u32, u32)>,
@@ -307,51 +382,6 @@ pub struct RenderArgs {
     /// image byte for byte.
     #[arg(long, value_name = "MODE", value_parser = one_of(MODES), default_value = "stream")]
     pub mode: RenderMode,
-    /// No progress and no closing statistics line (warnings still go to stderr). Without
-    /// it, progress shows as a bar on a terminal, and elsewhere (a log, CI), for a render
-    /// that lasts more than 3 s, as a plain line at every tenth of the tiles, at most every
-    /// 3 s and at least every 10 s.
-    #[arg(short, long)]
-    pub quiet: bool,
-    /// Also print the structure's build time and statistics, and the traversal work of
-    /// the frame's rays by kind (primary, shadow, reflection, refraction): the interior
-    /// nodes visited, child boxes tested, leaves entered, primitives tested (planes
-    /// included) and grid cells visited, in all and per ray. Counting runs the walks built
-    /// to count, which take a little longer than the plain ones: time renders without
-    /// --stats. With --quiet, only these lines.
-    #[arg(long)]
-    pub stats: bool,
-    /// Write a cost image instead of the colours: each pixel's count of COUNTER over all
-    /// its samples' rays (see --cost-rays): nodes (interior nodes visited), boxes (child
-    /// boxes tested), leaves (leaves entered), prims (primitives tested, planes included)
-    /// or cells (grid cells visited, --accel grid). A .png or .ppm output shows the counts
-    /// on the viridis scale (0 dark purple, the top of the scale yellow) with a colour bar
-    /// and its counts drawn beside the image; an .exr output keeps the raw counts as one
-    /// float channel, Y, which `merge` joins as it joins colour parts and `compare`
-    /// compares as counts. A counter the structure never counts is refused.
-    #[arg(long, value_name = "COUNTER", value_parser = one_of(COUNTERS))]
-    pub cost: Option<Counter>,
-    /// The rays a cost image counts: all (the primary rays and every ray they spawn,
-    /// shadow rays included) or primary (the primary rays alone).
-    #[arg(long, value_name = "RAYS", value_parser = one_of(COST_RAYS), default_value = "all",
-          requires = "cost")]
-    pub cost_rays: CostRays,
-    /// The count at the top of a cost picture's scale (larger counts take its colour, and
-    /// its label gets a +), so that pictures of two structures share one scale. Default:
-    /// the 99th percentile of the image's counts.
-    #[arg(long, value_name = "N", value_parser = parse_cost_max, requires = "cost",
-          allow_negative_numbers = true)]
-    pub cost_max: Option<f32>,
-    /// How a cost picture's colours follow the counts: linear, or log (the logarithm of
-    /// 1 + the count, for structures whose counts differ tenfold on one scale).
-    #[arg(long, value_name = "SCALE", value_parser = one_of(COST_SCALES),
-          default_value = "linear", requires = "cost", action = clap::ArgAction::Set)]
-    pub cost_scale: bool,
-    /// Write the run's statistics as one JSON object to FILE, or to standard output for
-    /// `-` (the closing line then goes to stderr): version, commit, CPU, scene, size,
-    /// samples, structure, build and render seconds, rays by kind, Mrays/s.
-    #[arg(long, value_name = "FILE|-")]
-    pub json: Option<PathBuf>,
     #[command(flatten)]
     pub accel: AccelArgs,
 }
@@ -738,7 +768,7 @@ mod tests {
         let render = |flags: &[&str]| {
             let line = ["p3trace", "render", "x.p3f"].iter().chain(flags);
             match Cli::try_parse_from(line).unwrap().command {
-                Command::Render(args) => args,
+                Command::Render(args) => args.settings,
                 _ => unreachable!("a render command"),
             }
         };

@@ -13,6 +13,7 @@
 //! - [`limits`] holds the sizes accepted from files and the command line.
 //! - [`compare`] measures how two images differ.
 //! - [`farm`] writes, reads and merges the parts of a frame split over many machines.
+//! - [`view`] orbits the camera and converges a still view to `render`'s image.
 //! - [`mod@bench`] runs the trace-throughput protocol of `../shared/bench/PROTOCOL.md`.
 //! - [`machine`] says what the binary was built for and what the CPU offers.
 //! - [`plural`] writes counts with their noun, singular or plural.
@@ -36,3 +37,4 @@ pub mod ray;
 pub mod render;
 pub mod scene;
 pub mod simd;
+pub mod view;

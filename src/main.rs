@@ -5,6 +5,7 @@
 mod cli;
 mod manual;
 mod statistics;
+mod window;
 
 use std::io::{IsTerminal, Write};
 use std::path::{Component, Path, PathBuf};
@@ -14,6 +15,7 @@ use clap::{CommandFactory, Parser};
 
 use cli::{
     BenchArgs, Cli, Command, CompareArgs, GenCommand, InfoArgs, MergeArgs, RenderArgs, SceneOutput,
+    Settings,
 };
 use p3trace::accel::count::Counter;
 use p3trace::accel::{AccelKind, AccelOptions, Tracer};
@@ -32,7 +34,7 @@ use p3trace::render::{self, RenderOptions, RenderReport, RenderWork, Sampling};
 use p3trace::scene::{self, Frame, Light, Scene};
 
 /// Why the command failed, and so which exit code it gives.
-enum Failure {
+pub(crate) enum Failure {
     /// Bad usage or a bad scene: exit 2.
     Usage(String),
     /// A render or I/O failure: exit 1.
@@ -61,6 +63,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => run_render(&args),
+        Command::View(args) => window::run(&args),
         Command::Info(args) => run_info(&args),
         Command::Compare(args) => run_compare(&args),
         Command::Merge(args) => run_merge(&args),
@@ -169,7 +172,7 @@ fn samples_label(sampling: Sampling) -> String {
 }
 
 /// The scene argument that names the course's random scene rather than a file.
-const RANDOM_SCENE: &str = "random";
+pub(crate) const RANDOM_SCENE: &str = "random";
 
 /// Reads the scene `path` names in `frame`: a P3F file, or for `random` the course's
 /// random scene laid out by `seed`. A file that cannot be read is an I/O failure (exit 1),
@@ -341,55 +344,70 @@ fn render_output(args: &RenderArgs) -> Result<PathBuf, Failure> {
 /// The scene as `render` takes it, read in the profile's frame, its lens as the flags set
 /// it; and the hash of its text, for the image's note.
 fn render_scene(args: &RenderArgs) -> Result<(Scene, u64), Failure> {
-    let profile = args.profile;
-    let mut scene = load_scene(&args.scene, args.seed, profile.frame())?;
-    let scene_hash = scene_hash(&args.scene, args.seed)?;
-    if let Some(aperture) = args.aperture {
+    let scene = settings_scene(&args.scene, &args.settings)?;
+    let scene_hash = scene_hash(&args.scene, args.settings.seed)?;
+    Ok((scene, scene_hash))
+}
+
+/// The scene `path` names as `render` and `view` take it: read in the profile's frame,
+/// its lens as the flags set it.
+pub(crate) fn settings_scene(path: &Path, settings: &Settings) -> Result<Scene, Failure> {
+    let mut scene = load_scene(path, settings.seed, settings.profile.frame())?;
+    if let Some(aperture) = settings.aperture {
         scene.camera.aperture = aperture;
     }
-    if let Some(focal) = args.focal {
+    if let Some(focal) = settings.focal {
         scene.camera.focal = focal;
     }
     scene
         .camera
         .validate()
         .map_err(|e| Failure::Usage(format!("{}: {e}", scene.name)))?;
-    Ok((scene, scene_hash))
+    Ok(scene)
 }
 
 /// The scene's render options as the flags change them; an image too large is refused.
 fn render_options(args: &RenderArgs, scene: &Scene) -> Result<RenderOptions, Failure> {
-    let mut options = RenderOptions::from_scene(scene);
-    if let Some((w, h)) = args.resolution {
-        (options.width, options.height) = (w, h);
-    }
-    if let Some(n) = args.spp {
-        options.sampling = Sampling::from_samples_per_pixel(n).map_err(Failure::Usage)?;
-    }
-    options.shade = options.shade.with_profile(args.profile);
-    if let Some(depth) = args.max_depth {
-        options.shade.max_depth = depth;
-    }
-    options.shade.schlick = args.schlick;
-    options.shade.soft_light_size = args.soft_shadows.then_some(args.light_size);
-    options.shade.light_grid = SampleGrid::with_cells(args.light_samples);
-    options.shade.roughness = args.roughness.unwrap_or(0.0);
-    if let Some(shutter) = args.shutter {
-        options.shutter = shutter;
-    }
-    options.skybox = !args.no_skybox;
-    options.threads = args.threads.map(|n| n as usize);
-    options.seed = args.seed;
-    options.mode = args.mode;
+    let mut options = settings_options(&args.settings, scene)?;
     options.progress = match (args.quiet, std::io::stderr().is_terminal()) {
         (true, _) => Progress::Hidden,
         (false, true) => Progress::Bar,
         (false, false) => Progress::Lines,
     };
-    options.accel = args.accel.options(scene.accel);
     options.region = region(args, options.width, options.height)?;
     options.count = args.stats || args.cost.is_some();
     options.check_size().map_err(Failure::Usage)?;
+    Ok(options)
+}
+
+/// The scene's render options as the flags that `render` and `view` share change them.
+pub(crate) fn settings_options(
+    settings: &Settings,
+    scene: &Scene,
+) -> Result<RenderOptions, Failure> {
+    let mut options = RenderOptions::from_scene(scene);
+    if let Some((w, h)) = settings.resolution {
+        (options.width, options.height) = (w, h);
+    }
+    if let Some(n) = settings.spp {
+        options.sampling = Sampling::from_samples_per_pixel(n).map_err(Failure::Usage)?;
+    }
+    options.shade = options.shade.with_profile(settings.profile);
+    if let Some(depth) = settings.max_depth {
+        options.shade.max_depth = depth;
+    }
+    options.shade.schlick = settings.schlick;
+    options.shade.soft_light_size = settings.soft_shadows.then_some(settings.light_size);
+    options.shade.light_grid = SampleGrid::with_cells(settings.light_samples);
+    options.shade.roughness = settings.roughness.unwrap_or(0.0);
+    if let Some(shutter) = settings.shutter {
+        options.shutter = shutter;
+    }
+    options.skybox = !settings.no_skybox;
+    options.threads = settings.threads.map(|n| n as usize);
+    options.seed = settings.seed;
+    options.mode = settings.mode;
+    options.accel = settings.accel.options(scene.accel);
     Ok(options)
 }
 

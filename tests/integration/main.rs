@@ -21,4 +21,5 @@ mod render;
 mod scale;
 mod scale_curve;
 mod simd;
+mod view;
 mod watertight;
