@@ -30,6 +30,7 @@ use p3trace::render::film::{Film, OutputFormat, Placement};
 use p3trace::render::progress::Progress;
 use p3trace::render::region::Region;
 use p3trace::render::sampler::SampleGrid;
+use p3trace::render::skybox::{damage_warning, not_loaded_warning, FaceFiles};
 use p3trace::render::{self, RenderOptions, RenderReport, RenderWork, Sampling};
 use p3trace::scene::{self, Frame, Light, Scene};
 
@@ -247,7 +248,7 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
         &scene,
         scene_hash,
         &options,
-        report.skybox,
+        report.skybox.is_some(),
         made_by,
         args.tile,
     );
@@ -443,6 +444,8 @@ fn summarise(
         for line in &report.accel_stats {
             say(&format!("  {line}"));
         }
+        let skybox = report.skybox.as_ref().map(|dir| dir.display().to_string());
+        say(&format!("skybox: {}", skybox.as_deref().unwrap_or("none")));
         if let Some(work) = &report.work {
             for line in work_lines(work) {
                 say(&line);
@@ -555,12 +558,19 @@ fn run_info(args: &InfoArgs) -> Result<ExitCode, Failure> {
         c.from, c.at, c.up, c.angle, c.width, c.height, c.hither, c.aperture, c.focal
     );
     println!("background: {}", scene.background);
-    match &scene.skybox {
-        Some(dir) if dir.is_dir() => println!("skybox: {}", dir.display()),
-        Some(dir) => println!(
-            "skybox: {} (missing: the background colour is used)",
-            dir.display()
-        ),
+    match scene.skybox.as_ref().map(|folder| folder.find()) {
+        Some(Ok(dir)) => {
+            println!("skybox: {}", dir.display());
+            // What `render` would say of its faces, read but not decoded.
+            let warnings = match FaceFiles::read(&dir) {
+                Ok(faces) => faces.damaged().iter().map(|f| damage_warning(f)).collect(),
+                Err(e) => vec![not_loaded_warning(&e)],
+            };
+            for w in warnings {
+                eprintln!("p3trace: warning: {w}");
+            }
+        }
+        Some(Err(e)) => println!("skybox: missing ({e}): the background colour is used"),
         None => println!("skybox: none"),
     }
     let accel = scene

@@ -52,6 +52,7 @@ pub fn render(
         "cpu": cpu,
         "command": "render",
         "scene": scene.name,
+        "skybox": report.skybox.as_ref().map(|dir| dir.display().to_string()),
         "output": output.display().to_string(),
         "resolution": [options.width, options.height],
         "region": [region.x0, region.x1, region.y0, region.y1],

@@ -251,7 +251,7 @@ fn watch(args: &ViewArgs, scene: &Scene, changes: Sender<PathBuf>) -> Option<Rec
     };
     let folder = folder_of(&args.scene);
     let mut folders = vec![folder];
-    folders.extend(scene.skybox.clone());
+    folders.extend(skybox_folder(scene));
     for folder in folders {
         if let Err(e) = watcher.watch(&folder, RecursiveMode::NonRecursive) {
             eprintln!(
@@ -261,6 +261,11 @@ fn watch(args: &ViewArgs, scene: &Scene, changes: Sender<PathBuf>) -> Option<Rec
         }
     }
     Some(watcher)
+}
+
+/// The folder the scene's skybox is read from, if it names one that is found.
+fn skybox_folder(scene: &Scene) -> Option<PathBuf> {
+    scene.skybox.as_ref().and_then(|folder| folder.find().ok())
 }
 
 /// The folder a file lies in: `.` for a bare name.
@@ -736,13 +741,17 @@ impl<'a> Viewer<'a> {
 
     /// Notes the changes on disk that concern the scene: its file, or its skybox's.
     fn notice_changes(&mut self, changes: &Receiver<PathBuf>) {
-        let file = self.path.file_name();
-        let skybox = self.scene.skybox.as_deref();
-        let mut due = false;
-        while let Ok(path) = changes.try_recv() {
-            due |= path.file_name() == file || skybox.is_some_and(|s| path.starts_with(s));
+        let paths: Vec<PathBuf> = changes.try_iter().collect();
+        if paths.is_empty() {
+            return;
         }
-        if due {
+        let skybox = skybox_folder(&self.scene).and_then(|dir| dir.canonicalize().ok());
+        let in_skybox = |path: &Path| {
+            let folder = path.parent().and_then(|dir| dir.canonicalize().ok());
+            skybox.is_some() && folder == skybox
+        };
+        let file = self.path.file_name();
+        if paths.iter().any(|p| p.file_name() == file || in_skybox(p)) {
             self.reload_at = Some(Instant::now() + RELOAD_DELAY);
         }
     }

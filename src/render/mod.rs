@@ -25,6 +25,7 @@ mod stream;
 
 use std::cell::RefCell;
 use std::ops::Range;
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -232,8 +233,9 @@ pub struct RenderReport {
     /// The structure's name and statistics lines.
     pub accel_name: String,
     pub accel_stats: Vec<String>,
-    /// Whether a skybox was drawn (the scene named one, it loaded, and it was wanted).
-    pub skybox: bool,
+    /// The folder of the skybox drawn, if one was (the scene named one, it was found and
+    /// loaded, and it was wanted).
+    pub skybox: Option<PathBuf>,
     pub warnings: Vec<String>,
     /// What the rays took, where `options.count` asked.
     pub work: Option<RenderWork>,
@@ -272,6 +274,8 @@ pub struct Stage<'s> {
     scene: &'s Scene,
     tracer: Tracer<'s>,
     skybox: Option<Skybox>,
+    /// The folder the skybox was found in and loaded from.
+    pub skybox_folder: Option<PathBuf>,
     /// What loading the skybox found wrong.
     pub warnings: Vec<String>,
 }
@@ -290,9 +294,11 @@ impl<'s> Stage<'s> {
             },
             ..options.accel
         };
-        let (skybox, tracer) = rayon::join(
+        let (loaded, tracer) = rayon::join(
             || match (&scene.skybox, options.skybox) {
-                (Some(dir), true) => Some(Skybox::load(dir)),
+                (Some(folder), true) => {
+                    Some(folder.find().and_then(|dir| Ok((Skybox::load(&dir)?, dir))))
+                }
                 _ => None,
             },
             || {
@@ -306,28 +312,22 @@ impl<'s> Stage<'s> {
                 }
             },
         );
-        let skybox = match skybox {
-            Some(Ok(sky)) => {
-                warnings.extend(sky.damaged().iter().map(|face| {
-                    format!(
-                        "damaged skybox face {face}: it is drawn as far as it decodes \
-                         (a copy whose line endings were converted has lost bytes)"
-                    )
-                }));
-                Some(sky)
+        let (skybox, skybox_folder) = match loaded {
+            Some(Ok((sky, dir))) => {
+                warnings.extend(sky.damaged().iter().map(|face| skybox::damage_warning(face)));
+                (Some(sky), Some(dir))
             }
             Some(Err(e)) => {
-                warnings.push(format!(
-                    "skybox not loaded ({e}); the background colour is used instead"
-                ));
-                None
+                warnings.push(skybox::not_loaded_warning(&e));
+                (None, None)
             }
-            None => None,
+            None => (None, None),
         };
         Stage {
             scene,
             tracer,
             skybox,
+            skybox_folder,
             warnings,
         }
     }
@@ -421,7 +421,7 @@ impl<'s> Stage<'s> {
             build_time,
             accel_name,
             accel_stats,
-            skybox: self.skybox.is_some(),
+            skybox: self.skybox_folder.clone(),
             warnings: Vec::new(),
             work,
         })

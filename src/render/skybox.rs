@@ -5,7 +5,7 @@
 //! repositories' faces are) decodes in silence to bands of pink and purple. It is drawn
 //! as it decodes, and [`Skybox::damaged`] names it.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -40,44 +40,86 @@ pub struct Skybox {
     damaged: Vec<String>,
 }
 
-impl Skybox {
-    /// Loads `DIR/{right,left,top,bottom,front,back}.jpg` (or `.png`), the faces on
-    /// rayon's threads: the course's six 2048 x 2048 faces take about as long to decode as
-    /// the dragon takes to render at one sample a pixel. Of several failures, the first
-    /// face's is reported.
-    pub fn load(dir: &Path) -> Result<Skybox, String> {
-        let faces: Vec<Result<(FaceImage, Option<String>), String>> = FACE_NAMES
+/// A skybox's six face files, read and checked but not decoded: what `info` says of a
+/// skybox, and what [`Skybox::load`] decodes.
+pub struct FaceFiles {
+    /// In the order of [`Face`].
+    files: Vec<FaceFile>,
+    damaged: Vec<String>,
+}
+
+struct FaceFile {
+    path: PathBuf,
+    bytes: Vec<u8>,
+}
+
+/// The first failure of `results` in their order (rayon's `collect` into a `Result`
+/// gives any one), or every value.
+fn in_order<T>(results: Vec<Result<T, String>>) -> Result<Vec<T>, String> {
+    results.into_iter().collect()
+}
+
+impl FaceFiles {
+    /// Reads `DIR/{right,left,top,bottom,front,back}.jpg` (or `.png`) and checks each JPEG
+    /// face's data, the faces on rayon's threads. Of several failures, the first face's is
+    /// reported.
+    pub fn read(dir: &Path) -> Result<FaceFiles, String> {
+        let files = in_order(
+            FACE_NAMES
+                .par_iter()
+                .map(|name| {
+                    let path = ["jpg", "jpeg", "png"]
+                        .iter()
+                        .map(|ext| dir.join(format!("{name}.{ext}")))
+                        .find(|p| p.is_file())
+                        .ok_or_else(|| {
+                            format!("no {name}.jpg or {name}.png in {}", dir.display())
+                        })?;
+                    let bytes = std::fs::read(&path)
+                        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+                    Ok(FaceFile { path, bytes })
+                })
+                .collect(),
+        )?;
+        let damaged = files
             .par_iter()
-            .map(|name| {
-                let path = ["jpg", "jpeg", "png"]
-                    .iter()
-                    .map(|ext| dir.join(format!("{name}.{ext}")))
-                    .find(|p| p.is_file())
-                    .ok_or_else(|| format!("no {name}.jpg or {name}.png in {}", dir.display()))?;
-                let bytes = std::fs::read(&path)
-                    .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-                let (image, damage) = decode_face(&bytes)
-                    .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-                if image.width() == 0 || image.height() == 0 {
-                    return Err(format!("{} is empty", path.display()));
-                }
-                let face = FaceImage {
-                    width: image.width(),
-                    height: image.height(),
-                    rgb: image.into_raw(),
-                };
-                Ok((face, damage.map(|e| format!("{} ({e})", path.display()))))
-            })
+            .filter_map(|f| damage(&f.bytes).map(|e| format!("{} ({e})", f.path.display())))
             .collect();
-        let (faces, damaged): (Vec<FaceImage>, Vec<Option<String>>) = faces
-            .into_iter()
-            .collect::<Result<Vec<_>, _>>()?
-            .into_iter()
-            .unzip();
-        Ok(Skybox {
-            faces,
-            damaged: damaged.into_iter().flatten().collect(),
-        })
+        Ok(FaceFiles { files, damaged })
+    }
+
+    /// The faces that decode only forgivingly, a line each: the path and, in brackets,
+    /// the damage.
+    pub fn damaged(&self) -> &[String] {
+        &self.damaged
+    }
+}
+
+impl Skybox {
+    /// Loads the faces [`FaceFiles::read`] reads and decodes them on rayon's threads: the
+    /// course's six 2048 x 2048 faces take about as long to decode as the dragon takes to
+    /// render at one sample a pixel. Of several failures, the first face's is reported.
+    pub fn load(dir: &Path) -> Result<Skybox, String> {
+        let FaceFiles { files, damaged } = FaceFiles::read(dir)?;
+        let faces = in_order(
+            files
+                .par_iter()
+                .map(|FaceFile { path, bytes }| {
+                    let image = image::load_from_memory(bytes)
+                        .map_err(|e| format!("cannot read {}: {e}", path.display()))?
+                        .into_rgb8();
+                    if image.width() == 0 || image.height() == 0 {
+                        return Err(format!("{} is empty", path.display()));
+                    }
+                    Ok(FaceImage {
+                        width: image.width(),
+                        height: image.height(),
+                        rgb: image.into_raw(),
+                    })
+                })
+                .collect(),
+        )?;
+        Ok(Skybox { faces, damaged })
     }
 
     /// The faces that decoded only forgivingly, a line each: the path and, in brackets,
@@ -104,14 +146,25 @@ impl Skybox {
     }
 }
 
-/// A face's pixels, and for a JPEG whose data [`jpeg_scan`] finds damaged, why.
-fn decode_face(bytes: &[u8]) -> Result<(image::RgbImage, Option<String>), String> {
-    let image = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
-    let damage = match image::guess_format(bytes) {
+/// Why a face's bytes are damaged, for a JPEG whose data [`jpeg_scan`] finds so.
+fn damage(bytes: &[u8]) -> Option<String> {
+    match image::guess_format(bytes) {
         Ok(image::ImageFormat::Jpeg) => jpeg_scan::damage(bytes),
         _ => None,
-    };
-    Ok((image.into_rgb8(), damage))
+    }
+}
+
+/// What `render` and `info` say of a damaged face, a line of [`FaceFiles::damaged`].
+pub fn damage_warning(face: &str) -> String {
+    format!(
+        "damaged skybox face {face}: it is drawn as far as it decodes (a copy whose line \
+         endings were converted has lost bytes)"
+    )
+}
+
+/// What `render` and `info` say of a skybox that does not load, and why.
+pub fn not_loaded_warning(why: &str) -> String {
+    format!("skybox not loaded ({why}); the background colour is used instead")
 }
 
 /// Index of the texel nearest to `s` in `[0, 1]` along a side of `size` texels.
@@ -202,7 +255,7 @@ mod tests {
 
     /// A face as a JPEG, and the face damaged: cut short by 12 bytes.
     #[test]
-    fn a_damaged_jpeg_face_says_so_and_decodes_as_before() {
+    fn a_damaged_jpeg_face_says_so() {
         let face = image::RgbImage::from_fn(64, 48, |x, y| image::Rgb([x as u8, y as u8, 0]));
         let mut bytes = Vec::new();
         image::DynamicImage::from(face)
@@ -211,13 +264,12 @@ mod tests {
                 image::ImageFormat::Jpeg,
             )
             .unwrap();
-        let (pixels, damage) = decode_face(&bytes).unwrap();
-        assert_eq!(damage, None);
-        assert!(pixels == image::load_from_memory(&bytes).unwrap().into_rgb8());
+        assert_eq!(damage(&bytes), None);
         let cut = &bytes[..bytes.len() - 12];
-        let (pixels, damage) = decode_face(cut).unwrap();
-        assert_eq!(damage.as_deref(), Some("premature end of data segment"));
-        assert!(pixels == image::load_from_memory(cut).unwrap().into_rgb8());
+        assert_eq!(
+            damage(cut).as_deref(),
+            Some("premature end of data segment")
+        );
     }
 
     #[test]

@@ -5,7 +5,7 @@ pub mod geometry;
 pub mod p3f;
 pub mod ply;
 
-use std::path::PathBuf;
+use std::path::{Component, Path, PathBuf};
 
 use glam::{DVec3, Vec3};
 
@@ -127,8 +127,8 @@ pub struct Scene {
     pub camera: CameraSpec,
     /// `bclr`: the colour of rays that leave the scene when there is no skybox.
     pub background: Vec3,
-    /// `env DIR`, resolved against the scene file's folder.
-    pub skybox: Option<PathBuf>,
+    /// `env DIR`: the skybox folder, and where to look for it.
+    pub skybox: Option<SkyboxFolder>,
     pub accel: Option<AccelKind>,
     /// `spp k`: k x k jittered samples per pixel; 0 is one sample at the pixel centre.
     pub spp: u32,
@@ -154,4 +154,106 @@ pub enum Frame {
     /// scene (camera and lights too) leaves its image as it is (P3F.md 4). Directions and
     /// lengths are the file's; [`Scene::origin`] holds the `from`.
     Camera,
+}
+
+/// The skybox folder of `env DIR`. It is looked for in the scene file's folder, then in
+/// the current folder, then in the scene folder's parent: students keep `skybox/` beside
+/// their folder of scenes, where the course's program, run from there, found it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkyboxFolder {
+    /// `DIR` as the file writes it.
+    pub name: PathBuf,
+    /// The folder of the scene file (empty for the current one).
+    pub scene_folder: PathBuf,
+}
+
+impl SkyboxFolder {
+    /// Where the folder is looked for, in order of preference, each place once: an
+    /// absolute `DIR` is its own only place.
+    pub fn places(&self) -> Vec<PathBuf> {
+        let here = Path::new(".");
+        let scene_folder = match self.scene_folder.as_os_str().is_empty() {
+            true => here,
+            false => self.scene_folder.as_path(),
+        };
+        let mut places: Vec<PathBuf> = Vec::new();
+        for folder in [scene_folder, here, &parent_folder(scene_folder)] {
+            let place = folder.join(&self.name);
+            if !places.iter().any(|p| same_place(p, &place)) {
+                places.push(place);
+            }
+        }
+        places
+    }
+
+    /// The first of [`SkyboxFolder::places`] that is a folder, or why there is none: a
+    /// sentence that names every place.
+    pub fn find(&self) -> Result<PathBuf, String> {
+        let places = self.places();
+        if let Some(found) = places.iter().find(|place| place.is_dir()) {
+            return Ok(found.clone());
+        }
+        let mut names: Vec<String> = places.iter().map(|p| p.display().to_string()).collect();
+        let last = names.pop().unwrap_or_default();
+        let listed = match names.is_empty() {
+            true => last,
+            false => format!("{} or {last}", names.join(", ")),
+        };
+        Err(format!("no skybox folder at {listed}"))
+    }
+}
+
+/// The folder that holds `folder`, by its name where it can (`scenes` is in `.`, `a/b` in
+/// `a`), else through `..`.
+fn parent_folder(folder: &Path) -> PathBuf {
+    match folder.components().next_back() {
+        Some(Component::Normal(_)) => match folder.parent() {
+            Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
+            _ => PathBuf::from("."),
+        },
+        Some(Component::CurDir) => PathBuf::from(".."),
+        Some(Component::RootDir) => folder.to_path_buf(),
+        _ => folder.join(".."),
+    }
+}
+
+/// Whether `a` and `b` name one place from the current folder (`./sky` and `/cwd/sky`).
+fn same_place(a: &Path, b: &Path) -> bool {
+    let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    absolute(a) == absolute(b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn places(name: &str, scene_folder: &str) -> Vec<PathBuf> {
+        let sky = SkyboxFolder {
+            name: name.into(),
+            scene_folder: scene_folder.into(),
+        };
+        sky.places()
+    }
+
+    #[test]
+    fn a_skybox_is_looked_for_beside_the_scene_then_here_then_above_the_scene() {
+        let paths = |list: &[&str]| list.iter().map(PathBuf::from).collect::<Vec<_>>();
+        assert_eq!(
+            places("skybox", "../course/scenes"),
+            paths(&["../course/scenes/skybox", "./skybox", "../course/skybox"])
+        );
+        // A scene in the current folder: its parent is `..`; in `scenes`, the current one.
+        assert_eq!(places("skybox", ""), paths(&["./skybox", "../skybox"]));
+        assert_eq!(places("sky", "scenes/"), paths(&["scenes/sky", "./sky"]));
+        assert_eq!(
+            places("sky", ".."),
+            paths(&["../sky", "./sky", "../../sky"])
+        );
+        assert_eq!(places("/opt/sky", "scenes"), paths(&["/opt/sky"]));
+        let here = std::env::current_dir().unwrap();
+        assert_eq!(
+            places("sky", here.to_str().unwrap()),
+            vec![here.join("sky"), here.parent().unwrap().join("sky")]
+        );
+    }
 }

@@ -15,11 +15,11 @@
 //! the camera in double precision.
 
 use std::fmt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
 
-use super::{AccelKind, CameraSpec, Frame, Light, Material, Scene, Warning};
+use super::{AccelKind, CameraSpec, Frame, Light, Material, Scene, SkyboxFolder, Warning};
 use crate::intersect::MIN_RADIUS;
 use crate::limits::{check_image_size, MAX_RESOLUTION, MAX_SPP_SIDE};
 use crate::plural::count;
@@ -486,7 +486,10 @@ impl<'a> Parser<'a> {
             "bclr" => self.scene.background = self.vec3("a colour component")?,
             "env" => {
                 let dir = self.token("the skybox folder")?;
-                self.scene.skybox = Some(self.base_dir.join(dir.text));
+                self.scene.skybox = Some(SkyboxFolder {
+                    name: PathBuf::from(dir.text),
+                    scene_folder: self.base_dir.to_path_buf(),
+                });
             }
             "v" => self.camera()?,
             "l" => {

@@ -616,7 +616,7 @@ fn jpeg_skybox(dir: &Path) {
 }
 
 #[test]
-fn a_damaged_skybox_face_is_named_and_the_render_goes_on() {
+fn a_damaged_skybox_face_is_named_by_render_and_info() {
     let dir = scratch("adversarial_damaged_sky");
     jpeg_skybox(&dir.join("sky"));
     let scene = write_scene(
@@ -654,4 +654,8 @@ fn a_damaged_skybox_face_is_named_and_the_render_goes_on() {
         1,
         "only the damaged face: {message}"
     );
+    // info says it too, in the same words.
+    let info = p3trace(&["info", scene.to_str().unwrap()]);
+    assert!(info.status.success(), "{}", stderr(&info));
+    assert_eq!(stderr(&info), message);
 }

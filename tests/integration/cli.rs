@@ -1470,3 +1470,87 @@ fn gen_names_the_skybox_from_where_the_scene_is_written() {
         stderr(&run)
     );
 }
+
+/// `env skybox` is looked for in the scene file's folder, then in the current folder,
+/// then in the scene folder's parent, where students keep it beside their folder of
+/// scenes; `info`, `render --stats` and `render --json` name the folder used, and the
+/// warning when none has it names every place tried.
+#[test]
+fn the_skybox_is_found_beside_the_scene_then_here_then_above_the_scene() {
+    let dir = scratch("cli_skybox_search");
+    let (course, work) = (dir.join("course"), dir.join("work"));
+    std::fs::create_dir_all(course.join("scenes")).unwrap();
+    std::fs::create_dir_all(&work).unwrap();
+    let camera = "v from 0 0 0 at 0 0 -1 up 0 1 0 angle 120 hither 0.01 resolution 8 8";
+    std::fs::write(
+        course.join("scenes/sky.p3f"),
+        format!("env skybox\n{camera}\n"),
+    )
+    .unwrap();
+    let run_in_work = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_p3trace"))
+            .args(args)
+            .current_dir(&work)
+            .output()
+            .unwrap()
+    };
+    let scene = "../course/scenes/sky.p3f";
+    // What info, render --stats (on stderr, --json taking stdout) and the JSON say of the
+    // skybox, the render's warnings and its image.
+    let said = || {
+        let info = run_in_work(&["info", scene]);
+        assert!(info.status.success(), "{}", stderr(&info));
+        let skybox_line = |text: &str| {
+            let line = text.lines().find(|l| l.starts_with("skybox: "));
+            line.unwrap_or_else(|| panic!("no skybox line: {text}"))
+                .to_string()
+        };
+        let render = run_in_work(&["render", scene, "--stats", "--json", "-", "-o", "out.png"]);
+        assert!(render.status.success(), "{}", stderr(&render));
+        let messages = stderr(&render);
+        let warnings: Vec<&str> = messages.lines().filter(|l| l.contains("warning")).collect();
+        let skybox = json(&stdout(&render))["skybox"].clone();
+        let image = std::fs::read(work.join("out.png")).unwrap();
+        let lines = [skybox_line(&stdout(&info)), skybox_line(&messages)];
+        (lines, skybox, warnings.join("\n"), image)
+    };
+    let (lines, skybox, warnings, plain) = said();
+    let places = "../course/scenes/skybox, ./skybox or ../course/skybox";
+    assert_eq!(
+        lines,
+        [
+            format!(
+                "skybox: missing (no skybox folder at {places}): the background colour is used"
+            ),
+            "skybox: none".to_string()
+        ]
+    );
+    assert_eq!(skybox, serde_json::Value::Null);
+    assert_eq!(
+        warnings,
+        format!(
+            "p3trace: warning: skybox not loaded (no skybox folder at {places}); the \
+             background colour is used instead"
+        )
+    );
+    // Each place in turn, from the last to the first: each is preferred to the ones
+    // before it, and draws its own sky (the two ups make two skies).
+    let mut images = vec![plain];
+    for (place, up, named) in [
+        (course.join("skybox"), "z", "../course/skybox"),
+        (work.join("skybox"), "y", "./skybox"),
+        (course.join("scenes/skybox"), "z", "../course/scenes/skybox"),
+    ] {
+        let sky = place.to_str().unwrap();
+        succeeds(&["gen", "skybox", "--size", "8", "--up", up, "-o", sky]);
+        let (lines, skybox, warnings, image) = said();
+        let line = format!("skybox: {named}");
+        assert_eq!(lines, [line.clone(), line], "{warnings}");
+        assert_eq!(skybox, serde_json::json!(named));
+        assert_eq!(warnings, "");
+        assert_ne!(Some(&image), images.last(), "{named}");
+        images.push(image);
+    }
+    // The scene's folder drew what the parent did: the same sky.
+    assert_eq!(images[1], images[3]);
+}

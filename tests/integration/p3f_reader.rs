@@ -37,7 +37,8 @@ fn reads_every_directive() {
     assert_eq!(scene.accel, Some(AccelKind::Bvh));
     assert_eq!(scene.spp, 3);
     assert_eq!(scene.background, Vec3::new(0.1, 0.2, 0.3));
-    assert_eq!(scene.skybox.as_deref(), Some(Path::new("sky")));
+    let skybox = scene.skybox.as_ref().map(|sky| sky.name.as_path());
+    assert_eq!(skybox, Some(Path::new("sky")));
     assert!(scene.has_camera);
     assert_eq!((scene.camera.width, scene.camera.height), (64, 48));
     assert_eq!(scene.lights.len(), 4);
@@ -232,7 +233,8 @@ fn env_is_relative_to_the_scene_folder() {
     let dir = common::scratch("reader_env");
     let path = dir.join("a.p3f");
     std::fs::write(&path, "env skybox\n").unwrap();
-    assert_eq!(parse_file(&path).unwrap().skybox, Some(dir.join("skybox")));
+    let skybox = parse_file(&path).unwrap().skybox.unwrap();
+    assert_eq!(skybox.places()[0], dir.join("skybox"));
 }
 
 #[test]
