@@ -12,6 +12,7 @@ use p3trace::accel::{AccelKind, AccelOptions, BvhBuild, BvhWidth};
 use p3trace::generate::skybox::Up;
 use p3trace::generate::{mountain, sphereflake};
 use p3trace::limits::MAX_SPP_SIDE;
+use p3trace::render::film::OutputFormat;
 use p3trace::render::light::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
 use p3trace::render::region::TileIndex;
 use p3trace::render::shade::Profile;
@@ -220,13 +221,18 @@ pub struct RenderArgs {
     #[arg(help = SCENE_HELP)]
     pub scene: PathBuf,
     /// Output image; the extension picks the format: .png (8-bit), .ppm (8-bit binary
-    /// P6), .hdr (linear floating point) or .exr (OpenEXR, linear 32-bit float, with the
-    /// scene's hash and the settings that change pixels in its `p3trace` attribute: the
-    /// format of a farm's parts). Default: the scene's name with .png, in the current
-    /// folder. An output that cannot be written (its folder missing, say) is refused
-    /// before the scene is read, with exit status 1; so is a --json FILE.
-    #[arg(short, long, value_name = "FILE")]
+    /// P6), .jpg or .jpeg (8-bit, lossy: see --quality), .hdr (linear floating point) or
+    /// .exr (OpenEXR, linear 32-bit float, with the scene's hash and the settings that
+    /// change pixels in its `p3trace` attribute: the format of a farm's parts). `-` writes
+    /// the image to standard output, as PNG unless --format names another; the closing
+    /// line and --stats then go to stderr (and --json - is refused). Default: the scene's
+    /// name with .png (or --format's extension), in the current folder. An output that
+    /// cannot be written (its folder missing, say) is refused before the scene is read,
+    /// with exit status 1; so is a --json FILE.
+    #[arg(short, long, value_name = "FILE|-")]
     pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub image: ImageArgs,
     /// Render only the pixels of this window, given as fractions of the image with y
     /// from the top (pbrt's --cropwindow): columns ceil(X0 W) to ceil(X1 W), rows
     /// ceil(Y0 H) to ceil(Y1 H), last ones excluded. An .exr output keeps the window's
@@ -264,10 +270,10 @@ pub struct RenderArgs {
     /// Write a cost image instead of the colours: each pixel's count of COUNTER over all
     /// its samples' rays (see --cost-rays): nodes (interior nodes visited), boxes (child
     /// boxes tested), leaves (leaves entered), prims (primitives tested, planes included)
-    /// or cells (grid cells visited, --accel grid). A .png or .ppm output shows the counts
-    /// on the viridis scale (0 dark purple, the top of the scale yellow) with a colour bar
-    /// and its counts drawn beside the image; an .exr output keeps the raw counts as one
-    /// float channel, Y, which `merge` joins as it joins colour parts and `compare`
+    /// or cells (grid cells visited, --accel grid). A PNG, PPM or JPEG output shows the
+    /// counts on the viridis scale (0 dark purple, the top of the scale yellow) with a
+    /// colour bar and its counts drawn beside the image; an EXR output keeps the raw counts
+    /// as one float channel, Y, which `merge` joins as it joins colour parts and `compare`
     /// compares as counts. A counter the structure never counts is refused.
     #[arg(long, value_name = "COUNTER", value_parser = one_of(COUNTERS))]
     pub cost: Option<Counter>,
@@ -386,19 +392,41 @@ pub struct Settings {
     pub accel: AccelArgs,
 }
 
+/// The format of the image `-o` names, and JPEG's quality.
+#[derive(Args, Debug)]
+pub struct ImageArgs {
+    /// The image's format: png, ppm, jpg (or jpeg), hdr or exr. For `-o -` (PNG without
+    /// it) and for a file whose extension names no format; a file whose extension names
+    /// another format is refused.
+    #[arg(long, value_name = "FORMAT", value_parser = one_of(FORMATS))]
+    pub format: Option<OutputFormat>,
+    /// JPEG output only (.jpg, .jpeg or --format jpg): the quality, from 1 (the smallest
+    /// file) to 100 (the least loss). Default: 90.
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = whole::<u8>(1..=100))]
+    pub quality: Option<u8>,
+}
+
 #[derive(Args, Debug)]
 pub struct MergeArgs {
     /// The parts: EXR files written by `render --tile`, `--crop` or `--pixel-bounds`.
     /// Parts may overlap where their pixels agree.
     #[arg(value_name = "PART")]
     pub parts: Vec<PathBuf>,
-    /// The merged image; the extension picks the format (.png, .ppm, .hdr or .exr), as
-    /// for `render -o`.
-    #[arg(short, long, value_name = "FILE", required_unless_present = "missing")]
+    /// The merged image; the extension picks the format (.png, .ppm, .jpg or .jpeg, .hdr
+    /// or .exr), and `-` is standard output, as for `render -o`.
+    #[arg(
+        short,
+        long,
+        value_name = "FILE|-",
+        required_unless_present = "missing"
+    )]
     pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub image: ImageArgs,
     /// Write nothing: print the tiles I/N still to render, one a line (nothing when the
     /// frame is complete), and exit 0. For a job array's resubmission.
-    #[arg(long, conflicts_with = "output")]
+    #[arg(long, conflicts_with_all = ["output", "format", "quality"])]
     pub missing: bool,
     /// The frame was split into N tiles: name missing tiles in tiles of N even when no
     /// part was rendered with --tile N (or none exists yet, when --missing lists all N).
@@ -498,8 +526,8 @@ impl AccelArgs {
     }
 }
 
-// The values of `--profile`, `--mode`, `--bvh` and `gen skybox --up` by name, in the
-// order help lists them.
+// The values of `--profile`, `--mode`, `--bvh`, `--format` and `gen skybox --up` by
+// name, in the order help lists them.
 const PROFILES: &[(&str, Profile)] =
     &[("standard", Profile::Standard), ("course", Profile::Course)];
 const MODES: &[(&str, RenderMode)] = &[
@@ -518,6 +546,14 @@ const COST_RAYS: &[(&str, CostRays)] = &[("all", CostRays::All), ("primary", Cos
 /// Whether a cost picture's scale is logarithmic.
 const COST_SCALES: &[(&str, bool)] = &[("linear", false), ("log", true)];
 const UP_AXES: &[(&str, Up)] = &[("y", Up::Y), ("z", Up::Z)];
+const FORMATS: &[(&str, OutputFormat)] = &[
+    ("png", OutputFormat::Png),
+    ("ppm", OutputFormat::Ppm),
+    ("jpg", OutputFormat::Jpeg),
+    ("jpeg", OutputFormat::Jpeg),
+    ("hdr", OutputFormat::Hdr),
+    ("exr", OutputFormat::Exr),
+];
 
 /// Parses one of `values` by its name; help, the man page and the completions list the
 /// names as they list a [`ValueEnum`]'s. The library's enums derive no `ValueEnum`, which
@@ -582,7 +618,7 @@ pub struct CompareArgs {
     /// Also write a heat map of where the images differ: each pixel's largest channel
     /// difference, black where equal, then blue, red and yellow up to white at the largest
     /// difference found, or at --diff-scale (the output line gives it in levels). The
-    /// extension picks the format: .png, .ppm, .hdr or .exr.
+    /// extension picks the format: .png, .ppm, .jpg or .jpeg, .hdr or .exr.
     #[arg(long, value_name = "FILE")]
     pub diff: Option<PathBuf>,
     /// The difference, in levels, that the heat map of --diff draws white; larger ones

@@ -14,8 +14,8 @@ use std::process::ExitCode;
 use clap::{CommandFactory, Parser};
 
 use cli::{
-    BenchArgs, Cli, Command, CompareArgs, GenCommand, InfoArgs, MergeArgs, RenderArgs, SceneOutput,
-    Settings,
+    BenchArgs, Cli, Command, CompareArgs, GenCommand, ImageArgs, InfoArgs, MergeArgs, RenderArgs,
+    SceneOutput, Settings,
 };
 use p3trace::accel::count::Counter;
 use p3trace::accel::{AccelKind, AccelOptions, Tracer};
@@ -26,7 +26,7 @@ use p3trace::intersect::IntersectOptions;
 use p3trace::plural::{count, noun};
 use p3trace::prim::PrimKind;
 use p3trace::render::cost::{self, CostMap};
-use p3trace::render::film::{Film, OutputFormat, Placement};
+use p3trace::render::film::{Film, ImageOutput, OutputFormat, Placement};
 use p3trace::render::progress::Progress;
 use p3trace::render::region::Region;
 use p3trace::render::sampler::SampleGrid;
@@ -153,9 +153,15 @@ fn grouped(n: u64) -> String {
     out
 }
 
-/// Where the lines for people go: stdout, or stderr when `--json -` takes stdout.
-fn human_output(json: Option<&Path>) -> fn(&str) {
-    if json == Some(Path::new("-")) {
+/// Whether `--json` (or `-o`) names standard output.
+fn is_stdout(target: Option<&Path>) -> bool {
+    target == Some(Path::new("-"))
+}
+
+/// Where the lines for people go: stdout, or stderr when the statistics or the image
+/// take stdout.
+fn human_output(stdout_taken: bool) -> fn(&str) {
+    if stdout_taken {
         |line| eprintln!("{line}")
     } else {
         |line| println!("{line}")
@@ -238,6 +244,10 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     let output = render_output(args)?;
     let (scene, scene_hash) = render_scene(args)?;
     let options = render_options(args, &scene)?;
+    let region = options.region();
+    output
+        .check_size(region.width(), region.height())
+        .map_err(Failure::Usage)?;
     let cost = cost_map(args, &options)?;
     let report = render::render(&scene, &options).map_err(Failure::Run)?;
     for w in &report.warnings {
@@ -252,7 +262,6 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
         made_by,
         args.tile,
     );
-    let region = options.region();
     let placement = Placement {
         image: (options.width, options.height),
         origin: (region.x0, region.y0),
@@ -325,20 +334,36 @@ fn cost_map(args: &RenderArgs, options: &RenderOptions) -> Result<Option<CostMap
     }))
 }
 
-/// The image `render` writes: `-o`, or the scene's name with .png in the current folder.
-fn render_output(args: &RenderArgs) -> Result<PathBuf, Failure> {
-    let output = args.output.clone().unwrap_or_else(|| {
+/// The image `render` writes: `-o` (`-` for standard output), or the scene's name with
+/// the format's extension in the current folder.
+fn render_output(args: &RenderArgs) -> Result<ImageOutput, Failure> {
+    let target = args.output.clone().unwrap_or_else(|| {
         let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy();
-        PathBuf::from(format!("{stem}.png"))
+        let format = args.image.format.unwrap_or(OutputFormat::Png);
+        PathBuf::from(format!("{stem}.{}", format.extension()))
     });
     // Refuse a bad output name, or one that cannot be written, before spending time on
     // the render.
-    let format = OutputFormat::from_path(&output).map_err(Failure::Usage)?;
-    if args.cost.is_some() && format == OutputFormat::Hdr {
+    let output = image_output(&target, &args.image)?;
+    if args.cost.is_some() && output.format == OutputFormat::Hdr {
         return Err(Failure::Usage(cost::refuse_hdr(&output)));
     }
-    check_output(&output)?;
+    if output.path.is_none() && is_stdout(args.json.as_deref()) {
+        return Err(Failure::Usage(
+            "-o - and --json - both write to standard output: send one of them to a file".into(),
+        ));
+    }
     check_statistics_target(args.json.as_deref())?;
+    Ok(output)
+}
+
+/// The image `-o TARGET` names with `--format` and `--quality`, refused (exit 2) where
+/// they disagree, and (exit 1) where a file cannot be written.
+fn image_output(target: &Path, image: &ImageArgs) -> Result<ImageOutput, Failure> {
+    let output = ImageOutput::new(target, image.format, image.quality).map_err(Failure::Usage)?;
+    if let Some(path) = &output.path {
+        check_output(path)?;
+    }
     Ok(output)
 }
 
@@ -432,9 +457,9 @@ fn summarise(
     scene: &Scene,
     options: &RenderOptions,
     report: &RenderReport,
-    output: &Path,
+    output: &ImageOutput,
 ) -> Result<(), Failure> {
-    let say = human_output(args.json.as_deref());
+    let say = human_output(is_stdout(args.json.as_deref()) || output.path.is_none());
     if args.stats {
         say(&format!(
             "{}: built in {:.3} s",
@@ -497,7 +522,7 @@ fn closing_line(
     scene: &Scene,
     options: &RenderOptions,
     report: &RenderReport,
-    output: &Path,
+    output: &ImageOutput,
 ) -> String {
     let seconds = report.elapsed.as_secs_f64();
     let rays = report.rays.total();
@@ -515,7 +540,7 @@ fn closing_line(
         grouped(rays),
         noun(rays as f64, "ray", "rays"),
         rays as f64 / 1e6 / seconds.max(1e-9),
-        output.display()
+        output.name()
     )
 }
 
@@ -714,10 +739,9 @@ fn compare_costs(
 
 fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
     // Refuse a bad output name, or one that cannot be written, before reading the parts.
-    if let Some(path) = &args.output {
-        OutputFormat::from_path(path).map_err(Failure::Usage)?;
-        check_output(path)?;
-    }
+    let output = (args.output.as_deref())
+        .map(|target| image_output(target, &args.image))
+        .transpose()?;
     // One part in memory at a time besides the canvas.
     let mut canvas: Option<Canvas> = None;
     for path in &args.parts {
@@ -790,10 +814,7 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
         }
         return Err(Failure::Usage(message));
     }
-    let output = args
-        .output
-        .as_deref()
-        .ok_or_else(|| Failure::Usage("merge needs -o FILE".into()))?;
+    let output = output.ok_or_else(|| Failure::Usage("merge needs -o FILE".into()))?;
     let placement = canvas.placement();
     match cost {
         Some(map) => {
@@ -801,9 +822,9 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
                 max: args.cost_max,
                 log: args.cost_scale.unwrap_or(false),
             };
-            cost::write(&canvas.film, output, &placement, &map, scale)
+            cost::write(&canvas.film, &output, &placement, &map, scale)
         }
-        None => canvas.film.write_placed(output, &placement),
+        None => canvas.film.write_placed(&output, &placement),
     }
     .map_err(Failure::Run)?;
     Ok(ExitCode::SUCCESS)
@@ -821,7 +842,7 @@ fn run_bench(args: &BenchArgs) -> Result<ExitCode, Failure> {
     let cores = p3trace::machine::logical_cpus();
     let threads = args.threads.map_or(cores, |n| n as usize);
     let (width, height) = bench::resolution(&scene);
-    let say = human_output(args.json.as_deref());
+    let say = human_output(is_stdout(args.json.as_deref()));
     say("# p3trace bench: trace-throughput protocol (PROTOCOL.md)");
     say(&format!("# scene {}", scene.name));
     let geometry = &scene.geometry;

@@ -9,6 +9,7 @@ use std::time::Duration;
 use p3trace::accel::count::Counter;
 use p3trace::bench::{Line, Work};
 use p3trace::machine;
+use p3trace::render::film::ImageOutput;
 use p3trace::render::{RenderOptions, RenderReport, RenderWork};
 use p3trace::scene::Scene;
 use serde_json::{json, Value};
@@ -40,7 +41,7 @@ pub fn render(
     scene: &Scene,
     options: &RenderOptions,
     report: &RenderReport,
-    output: &Path,
+    output: &ImageOutput,
 ) -> Value {
     let (program, cpu) = program_and_cpu();
     let grid = options.sampling.grid();
@@ -53,7 +54,7 @@ pub fn render(
         "command": "render",
         "scene": scene.name,
         "skybox": report.skybox.as_ref().map(|dir| dir.display().to_string()),
-        "output": output.display().to_string(),
+        "output": output.path.as_ref().map_or("-".into(), |p| p.display().to_string()),
         "resolution": [options.width, options.height],
         "region": [region.x0, region.x1, region.y0, region.y1],
         "samples_per_pixel": options.sampling.samples_per_pixel(),

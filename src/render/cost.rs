@@ -3,14 +3,12 @@
 //! a [`Film`] whose three channels hold the count, so that regions of one merge as colour
 //! ones do (`farm`); what it shows is a line of its note ([`CostMap::note_line`]), which
 //! keeps parts of cost and colour images apart. It is written as a false-colour picture
-//! with its scale beside it (PNG, PPM: viridis, a perceptual map, from 0 at the bottom of
-//! the bar to the top of the scale) or as the raw counts (OpenEXR, one float channel `Y`).
-
-use std::path::Path;
+//! with its scale beside it (PNG, PPM, JPEG: viridis, a perceptual map, from 0 at the
+//! bottom of the bar to the top of the scale) or as the raw counts (OpenEXR, one float channel `Y`).
 
 use glam::Vec3;
 
-use super::film::{Film, OutputFormat, Placement};
+use super::film::{Film, ImageOutput, OutputFormat, Placement};
 use super::shade::CostRays;
 use super::{RenderMode, RenderWork};
 use crate::accel::count::Counter;
@@ -118,28 +116,31 @@ impl Scale {
     }
 }
 
-/// Writes the cost image `film` to `path` in the format of its extension: PNG and PPM as
-/// the picture ([`picture`], on `scale`), EXR as the raw counts with `placement`. HDR is
-/// refused: a cost image is a picture or counts.
+/// Writes the cost image `film` as `output` says: PNG, PPM and JPEG as the picture
+/// ([`picture`], on `scale`), EXR as the raw counts with `placement`. HDR is refused: a
+/// cost image is a picture or counts.
 pub fn write(
     film: &Film,
-    path: &Path,
+    output: &ImageOutput,
     placement: &Placement,
     map: &CostMap,
     scale: Scale,
 ) -> Result<(), String> {
-    match OutputFormat::from_path(path)? {
-        OutputFormat::Exr => film.write_counts(path, placement),
-        OutputFormat::Hdr => Err(refuse_hdr(path)),
-        OutputFormat::Png | OutputFormat::Ppm => picture(film, map, scale).write(path),
+    match output.format {
+        OutputFormat::Exr => film.write_counts(output, placement),
+        OutputFormat::Hdr => Err(refuse_hdr(output)),
+        OutputFormat::Png | OutputFormat::Ppm | OutputFormat::Jpeg => {
+            let picture = picture(film, map, scale);
+            picture.write_placed(output, &Placement::whole(&picture))
+        }
     }
 }
 
-/// Why a cost image is not written as `path`, an HDR file.
-pub fn refuse_hdr(path: &Path) -> String {
+/// Why a cost image is not written as `output`, an HDR image.
+pub fn refuse_hdr(output: &ImageOutput) -> String {
     format!(
-        "a cost image cannot be written as '{}': use .exr for the counts or .png for a picture",
-        path.display()
+        "a cost image cannot be written as HDR ({}): use .exr for the counts or .png for a picture",
+        output.name()
     )
 }
 

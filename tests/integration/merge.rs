@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use crate::common::{p3trace, project_file, scratch, stderr, stdout};
 use p3trace::accel::AccelKind;
 use p3trace::farm::read_part;
-use p3trace::render::film::{Film, Placement};
+use p3trace::render::film::{Film, ImageOutput, Placement};
 use p3trace::render::region::Region;
 use p3trace::render::sampler::SampleGrid;
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
@@ -294,6 +294,24 @@ fn merge_refuses_parts_of_different_renders() {
     assert!(!out.exists());
 }
 
+/// `merge -o -` writes the frame to standard output, as `-o FILE` writes it; JPEG too.
+#[test]
+fn merge_writes_to_standard_output_and_jpeg() {
+    let dir = scratch("merge_stdout");
+    let parts = render_parts(&dir, &[], &["0/2", "1/2"]);
+    for (name, format) in [("frame.png", None), ("frame.jpg", Some("jpg"))] {
+        let file = dir.join(name);
+        run_ok(&["merge", arg(&parts[0]), arg(&parts[1]), "-o", arg(&file)]);
+        let mut args = vec!["merge", arg(&parts[0]), arg(&parts[1]), "-o", "-"];
+        if let Some(format) = format {
+            args.extend_from_slice(&["--format", format]);
+        }
+        let piped = p3trace(&args);
+        assert!(piped.status.success(), "{}", stderr(&piped));
+        assert!(piped.stdout == std::fs::read(&file).unwrap(), "{name}");
+    }
+}
+
 #[test]
 fn merge_names_the_missing_tiles_and_a_rerun_completes_the_frame() {
     let dir = scratch("merge_missing");
@@ -372,7 +390,7 @@ fn merge_takes_agreeing_overlaps_and_refuses_disagreeing_ones() {
     film.pixels[3].x = f32::from_bits(film.pixels[3].x.to_bits() ^ 1);
     let forged = dir.join("forged.exr");
     film.write_placed(
-        &forged,
+        &ImageOutput::file(&forged).unwrap(),
         &Placement {
             image: part.image,
             origin: (part.region.x0, part.region.y0),
@@ -395,7 +413,7 @@ fn merge_takes_agreeing_overlaps_and_refuses_disagreeing_ones() {
     note.push_str("\ntile: 1/2");
     let liar = dir.join("liar.exr");
     film.write_placed(
-        &liar,
+        &ImageOutput::file(&liar).unwrap(),
         &Placement {
             image: part.image,
             origin: (part.region.x0, part.region.y0),
