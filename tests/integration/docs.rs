@@ -1,7 +1,7 @@
 //! The documents as a newcomer meets them: every shell block of README.md and docs/*.md
-//! runs as shown, every relative link leads to a file, the README starts with the two
-//! commands it promises (the second the one `.ci/run` runs), and each document keeps to
-//! its length.
+//! runs as shown and prints what the document shows, every relative link leads to a
+//! file, the README starts with the two commands it promises (the second the one
+//! `.ci/run` runs), and each document keeps to its length.
 //!
 //! A block opened with ```` ```sh ```` runs unless the line before it is
 //! `<!-- not run: REASON -->`. It runs under `bash -euo pipefail` in a scratch folder
@@ -9,6 +9,15 @@
 //! as `../shared` (a block that names `../shared` skips when it is absent); `cargo run
 //! --release --`, `target/release/p3trace`, `p3trace` and `$P3TRACE` (which the scripts
 //! read) all run the binary under test, and any other `cargo` fails.
+//!
+//! A ```` ```text ```` block right after a run block (blank lines between) is what it
+//! prints, stdout and stderr together ([`Shown::matches`]): line by line, runs of spaces
+//! as one; a line `...` stands for any lines left out, and `...` within a line for text
+//! that depends on the machine (`# cpu ...`). What changes between runs or builds is
+//! masked on both sides ([`mask`]): a number before `s`, `ms` or `Mrays/s`, or after
+//! `build_s`; the commit; the packet width (`packets: 16 rays`, `p3trace-packet16`); a
+//! protocol line's last column, its rate. Every other figure is compared: counts, sizes
+//! in MiB (the same at both packet widths), checksums, image differences.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -23,13 +32,17 @@ struct Block {
     /// Why it is not run, from the `<!-- not run: ... -->` line before it.
     not_run: Option<String>,
     text: String,
+    /// What it prints, for a shell block: the text block right after it.
+    shown: Option<Shown>,
 }
 
 fn blocks(path: &str) -> Vec<Block> {
     let markdown = std::fs::read_to_string(project_file(path)).expect("the document reads");
-    let mut blocks = Vec::new();
+    let mut blocks: Vec<Block> = Vec::new();
     let mut lines = markdown.lines().enumerate();
     let mut previous = "";
+    // Whether only blank lines stand between the last block and here.
+    let mut right_after_a_block = false;
     while let Some((number, line)) = lines.next() {
         if let Some(language) = line.trim_start().strip_prefix("```") {
             let not_run = previous
@@ -42,18 +55,119 @@ fn blocks(path: &str) -> Vec<Block> {
                 .map(|(_, line)| line)
                 .take_while(|line| !line.trim_start().starts_with("```"))
                 .collect();
-            blocks.push(Block {
+            let block = Block {
                 place: format!("{path}:{}", number + 1),
                 language: language.trim().to_string(),
                 not_run,
                 text: text.join("\n"),
-            });
+                shown: None,
+            };
+            match blocks.last_mut() {
+                Some(shell)
+                    if right_after_a_block
+                        && shell.language == "sh"
+                        && block.language == "text" =>
+                {
+                    shell.shown = Some(Shown {
+                        place: block.place,
+                        lines: text.iter().map(|line| line.to_string()).collect(),
+                    });
+                }
+                _ => blocks.push(block),
+            }
             previous = "";
+            right_after_a_block = true;
         } else {
             previous = line;
+            right_after_a_block &= line.trim().is_empty();
         }
     }
     blocks
+}
+
+/// The output a document shows under a command.
+struct Shown {
+    /// Where the text block opens.
+    place: String,
+    lines: Vec<String>,
+}
+
+/// The line `...` of a shown output, or a piece of a line, that stands for what is left out.
+const LEFT_OUT: &str = "...";
+
+impl Shown {
+    /// Whether `printed` is what the document shows: each shown line matches a printed
+    /// line ([`line_matches`]), in order, and a line [`LEFT_OUT`] any lines, none
+    /// included; both sides masked ([`mask`]).
+    fn matches(&self, printed: &str) -> bool {
+        let shown: Vec<String> = self.lines.iter().map(|l| mask(l)).collect();
+        let printed: Vec<String> = printed.lines().map(mask).collect();
+        // can[i][j]: the first i shown lines match the first j printed ones.
+        let mut can = vec![vec![false; printed.len() + 1]; shown.len() + 1];
+        can[0][0] = true;
+        for (i, line) in shown.iter().enumerate() {
+            for j in 0..=printed.len() {
+                can[i + 1][j] = if line == LEFT_OUT {
+                    can[i][j] || (j > 0 && can[i + 1][j - 1])
+                } else {
+                    j > 0 && can[i][j - 1] && line_matches(line, &printed[j - 1])
+                };
+            }
+        }
+        can[shown.len()][printed.len()]
+    }
+}
+
+/// Whether the `printed` line is the `shown` one, a [`LEFT_OUT`] in it standing for any
+/// text.
+fn line_matches(shown: &str, printed: &str) -> bool {
+    let mut pieces = shown.split(LEFT_OUT);
+    let first = pieces.next().unwrap_or_default();
+    let Some(mut rest) = printed.strip_prefix(first) else {
+        return false;
+    };
+    let mut pieces: Vec<&str> = pieces.collect();
+    let Some(last) = pieces.pop() else {
+        return rest.is_empty();
+    };
+    for piece in pieces {
+        match rest.find(piece) {
+            Some(at) => rest = &rest[at + piece.len()..],
+            None => return false,
+        }
+    }
+    rest.len() >= last.len() && rest.ends_with(last)
+}
+
+/// What closes a figure in a line: `0.160 s,`, `(commit 1a2b3c)`.
+const CLOSING: [char; 3] = [',', ';', ')'];
+
+/// A line with its runs of spaces as one, and what changes between runs and builds as
+/// `#` (the module's comment lists what).
+fn mask(line: &str) -> String {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let protocol_line = words.get(1).is_some_and(|api| api.starts_with("p3trace-"));
+    let masked: Vec<String> = (words.iter().enumerate())
+        .map(|(i, word)| {
+            let before = if i > 0 { words[i - 1] } else { "" };
+            let unit = words.get(i + 1).map(|u| u.trim_end_matches(CLOSING));
+            let figure = word.trim_end_matches(CLOSING);
+            let is_number = !figure.is_empty()
+                && figure
+                    .chars()
+                    .all(|c| c.is_ascii_digit() || c == '.' || c == ',');
+            let run_dependent = matches!(unit, Some("s" | "ms" | "Mrays/s"))
+                || matches!(before, "build_s" | "packets:" | "(commit")
+                || (protocol_line && i + 1 == words.len());
+            if run_dependent && (is_number || before == "(commit") {
+                format!("#{}", &word[figure.len()..])
+            } else {
+                word.replace("packet16", "packet#")
+                    .replace("packet8", "packet#")
+            }
+        })
+        .collect();
+    masked.join(" ")
 }
 
 /// README.md and every page of docs/, in a fixed order.
@@ -137,28 +251,67 @@ fn every_shell_block_runs_as_shown() {
                 .text
                 .replace("cargo run --release -- ", "p3trace ")
                 .replace("target/release/p3trace", "p3trace");
+            // stderr into stdout, as a terminal shows them: in the order they come.
             let run = Command::new("bash")
-                .args(["-euo", "pipefail", "-c", &script])
+                .args(["-euo", "pipefail", "-c", &format!("exec 2>&1\n{script}")])
                 .current_dir(&project)
                 .env("PATH", &path)
                 .env("P3TRACE", env!("CARGO_BIN_EXE_p3trace"))
                 .output()
                 .expect("bash runs");
             ran += 1;
+            let printed = common::stdout(&run);
             if !run.status.success() {
                 failures.push(format!(
-                    "{} failed ({}):\n{}\n--- stdout\n{}--- stderr\n{}",
+                    "{} failed ({}):\n{}\n--- output\n{printed}",
+                    block.place, run.status, block.text,
+                ));
+            } else if let Some(shown) = block.shown.as_ref().filter(|s| !s.matches(&printed)) {
+                failures.push(format!(
+                    "{} shows another output than {} prints:\n{}\n--- shown\n{}\n--- printed\n{printed}",
+                    shown.place,
                     block.place,
-                    run.status,
                     block.text,
-                    common::stdout(&run),
-                    common::stderr(&run)
+                    shown.lines.join("\n")
                 ));
             }
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
     assert!(ran > 0, "no block ran");
+}
+
+/// What a shown output stands for: the masked figures, `...` lines and pieces of lines.
+#[test]
+fn shown_outputs_mask_what_changes_between_runs_and_nothing_else() {
+    let shown = |text: &str| Shown {
+        place: "test".into(),
+        lines: text.lines().map(String::from).collect(),
+    };
+    let render = shown("a.p3f: 8x8, 1 spp, 0.010 s, 72,815 rays, 7.66 Mrays/s -> a.png");
+    assert!(render.matches("a.p3f: 8x8, 1 spp, 1.5 s, 72,815 rays, 12.00 Mrays/s -> a.png\n"));
+    assert!(!render.matches("a.p3f: 8x8, 1 spp, 0.010 s, 72,816 rays, 7.66 Mrays/s -> a.png"));
+    assert!(!render.matches("a.p3f: 8x8, 1 spp, 0.010 s, 72,815 rays, 7.66 Mrays/s -> b.png"));
+    let bench = shown(
+        "# structure bvh sah, build_s 0.0001\n# cpu ...; best of 1 pass\n...\n\
+                       primary  p3trace-packet8  1  1048576  1048576  4630431.553  21.11\n...",
+    );
+    let printed = "# structure bvh sah, build_s 0.0123\n# cpu Some CPU, 2 CPUs; best of 1 pass\n\
+                   primary p3trace-single 1 1048576 1048576 4630431.553 9.56\n\
+                   primary p3trace-packet16 1 1048576 1048576 4630431.553 45.95\n";
+    assert!(bench.matches(printed));
+    assert!(!bench.matches(&printed.replace("4630431.553 45", "4630431.554 45")));
+    assert!(!bench.matches(&printed.replace("best of 1", "best of 2")));
+    let info = shown("  memory: 0.07 MiB\n  8-wide: 80 nodes, depth 4, 0.19 MiB");
+    assert!(info.matches("memory: 0.07 MiB\n8-wide: 80 nodes, depth 4, 0.19 MiB"));
+    assert!(!info.matches("memory: 0.07 MiB\n8-wide: 80 nodes, depth 4, 0.13 MiB"));
+    assert!(
+        !info.matches("memory: 0.07 MiB"),
+        "every shown line is printed"
+    );
+    let version = shown("p3trace 0.1.0 (commit da6e5d8c76cb)\npackets: 16 rays");
+    assert!(version.matches("p3trace 0.1.0 (commit 0123456789ab)\npackets: 8 rays"));
+    assert!(!version.matches("p3trace 0.2.0 (commit 0123456789ab)\npackets: 8 rays"));
 }
 
 /// The README's first block holds the two commands: a render of a scene in `scenes/`,
