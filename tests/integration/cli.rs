@@ -155,8 +155,11 @@ fn writes_jpeg_at_a_quality_and_images_to_standard_output() {
         std::fs::read(dir.join("image")).unwrap(),
         std::fs::read(dir.join("image.jpg")).unwrap()
     );
-    // --stats, too, gives stdout to the image.
-    let stats = render(&["-o", "-", "--stats"]);
+    // --stats, too, gives stdout to the image; the statistics name it `-`.
+    let statistics = file("stats.json");
+    let stats = render(&["-o", "-", "--stats", "--json", &statistics]);
+    let written = json(&std::fs::read_to_string(&statistics).unwrap());
+    assert_eq!(written["output"], "-");
     assert!(stats.stdout == std::fs::read(dir.join("image.png")).unwrap());
     assert!(stderr(&stats).contains("\nskybox: "), "{}", stderr(&stats));
 
