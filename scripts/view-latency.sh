@@ -7,10 +7,11 @@
 set -euo pipefail
 bin=target/release/p3trace
 if [ $# -gt 0 ] && [ -x "$1" ] && [ ! -d "$1" ]; then bin=$1; shift; fi
-exec 3< <(Xvfb -displayfd 1 -screen 0 1920x1080x24 -nolisten tcp -noreset 2>/dev/null)
+exec 3< <(exec Xvfb -displayfd 1 -screen 0 1920x1080x24 -nolisten tcp -noreset 2>/dev/null)
+xvfb=$!
 read -r -u 3 number
 export DISPLAY=":$number"
-trap 'pkill -TERM -f "Xvfb -displayfd 1 -screen 0 1920x1080x24" || true' EXIT
+trap 'kill -TERM "$xvfb" 2>/dev/null || true' EXIT
 for scene in "$@"; do
   log=$(mktemp)
   "$bin" view "$scene" 2>"$log" >/dev/null &

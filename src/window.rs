@@ -11,6 +11,7 @@
 
 use std::cell::RefCell;
 use std::collections::BTreeMap;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::rc::Rc;
@@ -299,7 +300,6 @@ fn cost_counter(kind: AccelKind) -> Counter {
 /// The window's state.
 struct Viewer<'a> {
     args: &'a ViewArgs,
-    path: PathBuf,
     scene: Arc<Scene>,
     version: u64,
     /// The options of the flags and the file, before the keys change them.
@@ -346,7 +346,6 @@ impl<'a> Viewer<'a> {
         let (width, height) = (base.width, base.height);
         Viewer {
             args,
-            path: args.scene.clone(),
             scene: Arc::new(scene),
             version: 0,
             accel: base.accel.kind,
@@ -388,7 +387,7 @@ impl<'a> Viewer<'a> {
         let pressed = KeyPresses::default();
         window.set_input_callback(Box::new(pressed.clone()));
         while window.is_open() {
-            if self.keys(&pressed)? {
+            if self.keys(&pressed) {
                 break;
             }
             self.mouse(window);
@@ -419,26 +418,29 @@ impl<'a> Viewer<'a> {
                 title = wanted;
             }
         }
+        // A pass of brute force can take long: the renderer stops at its next tile.
+        if let Some((_, _, stop)) = &self.running {
+            stop.store(true, Ordering::Relaxed);
+        }
         Ok(ExitCode::SUCCESS)
     }
 
     /// The keys pressed since the last frame; true to quit.
-    fn keys(&mut self, pressed: &KeyPresses) -> Result<bool, Failure> {
+    fn keys(&mut self, pressed: &KeyPresses) -> bool {
         let keys: Vec<Key> = pressed.0.borrow_mut().drain(..).collect();
         for key in keys {
             match key {
-                Key::Escape | Key::Q => return Ok(true),
+                Key::Escape | Key::Q => return true,
                 Key::R => {
                     self.orbit.reset();
                     self.new_view();
                 }
                 Key::C => {
-                    let scene = &self.scene;
-                    print!("{}", camera_block(&self.camera(), scene.origin));
-                    use std::io::Write;
+                    // The file's lens, whether or not `e` turned the effects off.
+                    print!("{}", camera_block(&self.orbit.camera(), self.scene.origin));
                     let _ = std::io::stdout().flush();
                 }
-                Key::S => self.save()?,
+                Key::S => self.save(),
                 Key::E => {
                     self.effects = !self.effects;
                     self.new_view();
@@ -457,7 +459,7 @@ impl<'a> Viewer<'a> {
                 }
             }
         }
-        Ok(false)
+        false
     }
 
     /// Left drag orbits, right drag and the wheel move the eye along the view.
@@ -716,16 +718,17 @@ impl<'a> Viewer<'a> {
     }
 
     /// Writes the image shown as SCENE.png, or SCENE-1.png and on where that exists.
-    fn save(&self) -> Result<(), Failure> {
+    fn save(&self) {
         let Some(film) = &self.shown else {
             eprintln!("p3trace: view: nothing to save yet (the camera is moving)");
-            return Ok(());
+            return;
         };
         let stem = self
-            .path
+            .args
+            .scene
             .file_stem()
             .map_or("view".into(), |s| s.to_string_lossy().into_owned());
-        let path = (0..)
+        let path = (0u64..)
             .map(|n| match n {
                 0 => PathBuf::from(format!("{stem}.png")),
                 n => PathBuf::from(format!("{stem}-{n}.png")),
@@ -736,7 +739,6 @@ impl<'a> Viewer<'a> {
             Ok(()) => eprintln!("p3trace: view: saved {}", path.display()),
             Err(e) => eprintln!("p3trace: error: {e}"),
         }
-        Ok(())
     }
 
     /// Notes the changes on disk that concern the scene: its file, or its skybox's.
@@ -750,25 +752,36 @@ impl<'a> Viewer<'a> {
             let folder = path.parent().and_then(|dir| dir.canonicalize().ok());
             skybox.is_some() && folder == skybox
         };
-        let file = self.path.file_name();
+        let file = self.args.scene.file_name();
         if paths.iter().any(|p| p.file_name() == file || in_skybox(p)) {
             self.reload_at = Some(Instant::now() + RELOAD_DELAY);
         }
     }
 
-    /// Reads the scene again once its files have been still for [`RELOAD_DELAY`]: the
-    /// camera moved by the mouse stays unless the file's camera changed; a scene that no
-    /// longer reads leaves the image as it was, its error in the title and on stderr.
+    /// Reads the scene again once its files have been still for [`RELOAD_DELAY`], with its
+    /// settings (the window keeps its size): the camera moved by the mouse stays unless
+    /// the file's camera changed; a scene that no longer reads leaves the image as it
+    /// was, its error in the title and on stderr.
     fn reload_when_due(&mut self) {
         if self.reload_at.is_none_or(|at| Instant::now() < at) {
             return;
         }
         self.reload_at = None;
-        match read(self.args) {
-            Ok(scene) => {
+        let reread = read(self.args).and_then(|scene| {
+            let base = crate::settings_options(&self.args.settings, &scene)?;
+            Ok((scene, base))
+        });
+        match reread {
+            Ok((scene, base)) => {
                 if scene.camera != self.scene.camera {
                     self.orbit = Orbit::new(&scene.camera);
                 }
+                // The file's settings anew (its samples, say), in the window's size.
+                self.base = RenderOptions {
+                    width: self.base.width,
+                    height: self.base.height,
+                    ..base
+                };
                 self.scene = Arc::new(scene);
                 self.version += 1;
                 self.error = None;

@@ -314,7 +314,11 @@ impl<'s> Stage<'s> {
         );
         let (skybox, skybox_folder) = match loaded {
             Some(Ok((sky, dir))) => {
-                warnings.extend(sky.damaged().iter().map(|face| skybox::damage_warning(face)));
+                warnings.extend(
+                    sky.damaged()
+                        .iter()
+                        .map(|face| skybox::damage_warning(face)),
+                );
                 (Some(sky), Some(dir))
             }
             Some(Err(e)) => {

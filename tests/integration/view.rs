@@ -49,22 +49,31 @@ struct Display {
     name: String,
 }
 
+/// Whether Xvfb, xdotool and xwd are installed; where one is not, says that the test
+/// skips, or under CI fails.
+fn tools_present() -> bool {
+    for tool in ["Xvfb", "xdotool", "xwd"] {
+        let found = Command::new("sh")
+            .args(["-c", &format!("command -v {tool}")])
+            .output()
+            .is_ok_and(|o| o.status.success());
+        if !found {
+            assert!(
+                std::env::var_os("CI").is_none(),
+                "CI must install {tool} for the window tests (see .ci/run)"
+            );
+            skip(format_args!("{tool} is not installed"));
+            return false;
+        }
+    }
+    true
+}
+
 impl Display {
     /// The server, or `None` (said, or under CI a failure) where the tools are missing.
     fn start() -> Option<Display> {
-        for tool in ["Xvfb", "xdotool", "xwd"] {
-            let found = Command::new("sh")
-                .args(["-c", &format!("command -v {tool}")])
-                .output()
-                .is_ok_and(|o| o.status.success());
-            if !found {
-                assert!(
-                    std::env::var_os("CI").is_none(),
-                    "CI must install {tool} for the window tests (see .ci/run)"
-                );
-                skip(format_args!("{tool} is not installed"));
-                return None;
-            }
+        if !tools_present() {
+            return None;
         }
         let mut server = Command::new("Xvfb")
             // No reset when the last client leaves (each xdotool call is a client): a
@@ -456,10 +465,10 @@ fn an_edit_is_shown_and_a_broken_one_keeps_the_image() {
     );
     assert!(viewer.stderr.lock().unwrap().contains("viewed.p3f:20:"));
 
-    // Mended, the error goes.
-    std::fs::write(&path, SCENE).unwrap();
+    // Mended, the error goes; the file's settings are read again too.
+    std::fs::write(&path, SCENE.replace("spp 2", "spp 3")).unwrap();
     viewer.wait_title(
-        |t| !t.contains("error:") && t.contains("| 4/4 spp"),
+        |t| !t.contains("error:") && t.contains("| 9/9 spp"),
         "no error",
     );
     viewer.key("Escape");
@@ -543,4 +552,28 @@ fn passes_add_up_to_the_render_bit_for_bit() {
             assert!(sums.image().pixels == whole.pixels, "{name} {mode:?}");
         }
     }
+}
+
+/// docs/view.md's screenshot is what `scripts/view-screenshot.sh` makes, pixel for pixel
+/// (its PNG's compression is the local zlib's).
+#[test]
+fn the_screenshot_of_the_docs_is_what_its_script_makes() {
+    if !tools_present() {
+        return;
+    }
+    let out = scratch("view_screenshot").join("view.png");
+    let run = Command::new(project_file("scripts/view-screenshot.sh"))
+        .env("P3TRACE", env!("CARGO_BIN_EXE_p3trace"))
+        .env("OUT", &out)
+        .output()
+        .expect("the screenshot script runs");
+    assert!(run.status.success(), "{}", stderr(&run));
+    let made = image::open(&out).unwrap().to_rgb8();
+    let committed = image::open(project_file("docs/view.png"))
+        .unwrap()
+        .to_rgb8();
+    assert!(
+        made == committed,
+        "docs/view.png is not what scripts/view-screenshot.sh makes: run the script"
+    );
 }
