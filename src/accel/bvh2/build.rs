@@ -2,6 +2,8 @@
 //! SAH. Both write nodes depth first into one array, allocated once, and reorder the
 //! primitives so that each leaf's are contiguous.
 
+use glam::Vec3A;
+
 use super::{BvhBuild, Node, TRAVERSAL_COST};
 use crate::accel::bounds::prim_bounds;
 use crate::intersect::Aabb;
@@ -37,6 +39,48 @@ impl Item {
 
 const _: () = assert!(std::mem::size_of::<Item>() == 28);
 
+/// The box of a node's items and the box of their centroids: a split finds its children's
+/// as it splits (from its bins and as it moves the items), so that no node passes over
+/// its items again to find them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Boxes {
+    bounds: Aabb,
+    centroids: Aabb,
+}
+
+impl Boxes {
+    fn of(items: &[Item]) -> Boxes {
+        items.iter().fold(
+            Boxes {
+                bounds: Aabb::EMPTY,
+                centroids: Aabb::EMPTY,
+            },
+            |b, it| Boxes {
+                bounds: b.bounds.union(it.bounds),
+                centroids: b.centroids.grow(it.bounds.centre()),
+            },
+        )
+    }
+}
+
+/// Where a node's items split: the first `k` go left; each side's boxes.
+struct Split {
+    k: usize,
+    left: Boxes,
+    right: Boxes,
+}
+
+impl Split {
+    /// The split at `k` of items already in their order, its boxes found by a pass.
+    fn at(items: &[Item], k: usize) -> Split {
+        Split {
+            k,
+            left: Boxes::of(&items[..k]),
+            right: Boxes::of(&items[k..]),
+        }
+    }
+}
+
 /// What the node array holds until the build writes it.
 const UNUSED: Node = Node {
     min: [0.0; 3],
@@ -68,7 +112,8 @@ pub(super) fn build(
     // `tests/memory/huge_scene.rs`).
     let mut nodes = vec![UNUSED; (2 * items.len()).saturating_sub(1)];
     if !items.is_empty() {
-        let used = grow(&mut nodes, 0, &mut items, 0, 0, build);
+        let boxes = Boxes::of(&items);
+        let used = grow(&mut nodes, 0, &mut items, boxes, 0, 0, build);
         nodes.truncate(used);
     }
     let prims = items.iter().map(|it| it.prim).collect();
@@ -79,17 +124,19 @@ pub(super) fn build(
 }
 
 /// Builds the subtree over `items` (which start at `offset` in the final primitive
-/// order) at the start of `nodes`, whose first node is `base` in the whole array, depth
-/// first; returns the number of nodes it took. `nodes` holds at least `2 items.len() - 1`.
+/// order, and whose boxes are `boxes`) at the start of `nodes`, whose first node is
+/// `base` in the whole array, depth first; returns the number of nodes it took. `nodes`
+/// holds at least `2 items.len() - 1`.
 fn grow(
     nodes: &mut [Node],
     base: usize,
     items: &mut [Item],
+    boxes: Boxes,
     offset: usize,
     depth: usize,
     build: BvhBuild,
 ) -> usize {
-    let bounds = items.iter().fold(Aabb::EMPTY, |b, it| b.union(it.bounds));
+    let bounds = boxes.bounds;
     nodes[0] = Node {
         min: bounds.min.to_array(),
         offset: offset as u32,
@@ -101,17 +148,21 @@ fn grow(
         BvhBuild::Sah => MAX_LEAF,
     };
     let split = if depth >= FREE_DEPTH {
-        median_split(items, leaf_size)
+        median_split(items, &boxes.centroids, leaf_size).map(|k| Split::at(items, k))
     } else {
         match build {
-            BvhBuild::Midpoint => midpoint_split(items, &bounds),
-            BvhBuild::Sah => sah_split(items, &bounds),
+            BvhBuild::Midpoint => midpoint_split(items, &bounds).map(|k| Split::at(items, k)),
+            BvhBuild::Sah => sah_split(items, &boxes),
         }
     };
-    let Some(k) = split else {
+    let Some(split) = split else {
         return 1;
     };
+    let k = split.k;
     let (left, right) = items.split_at_mut(k);
+    let child = |nodes: &mut [Node], base, items: &mut [Item], boxes, offset| {
+        grow(nodes, base, items, boxes, offset, depth + 1, build)
+    };
     let (left_used, right_used) = if left.len() + right.len() > PARALLEL_BUILD {
         // The two subtrees on two threads, the right one after the most room the left
         // one can take (2k - 1 nodes), then moved down to follow it: the same array as
@@ -120,8 +171,8 @@ fn grow(
         let (left_nodes, right_nodes) = nodes[1..].split_at_mut(room);
         let right_base = base + 1 + room;
         let (left_used, right_used) = rayon::join(
-            || grow(left_nodes, base + 1, left, offset, depth + 1, build),
-            || grow(right_nodes, right_base, right, offset + k, depth + 1, build),
+            || child(left_nodes, base + 1, left, split.left, offset),
+            || child(right_nodes, right_base, right, split.right, offset + k),
         );
         let (from, shift) = (1 + room, room - left_used);
         for node in &mut nodes[from..from + right_used] {
@@ -132,10 +183,10 @@ fn grow(
         nodes.copy_within(from..from + right_used, 1 + left_used);
         (left_used, right_used)
     } else {
-        let left_used = grow(&mut nodes[1..], base + 1, left, offset, depth + 1, build);
+        let left_used = child(&mut nodes[1..], base + 1, left, split.left, offset);
         let right_nodes = &mut nodes[1 + left_used..];
         let right_base = base + 1 + left_used;
-        let right_used = grow(right_nodes, right_base, right, offset + k, depth + 1, build);
+        let right_used = child(right_nodes, right_base, right, split.right, offset + k);
         (left_used, right_used)
     };
     nodes[0].offset = (base + 1 + left_used) as u32;
@@ -143,19 +194,13 @@ fn grow(
     1 + left_used + right_used
 }
 
-fn centroid_bounds(items: &[Item]) -> Aabb {
-    items
-        .iter()
-        .fold(Aabb::EMPTY, |b, it| b.grow(it.bounds.centre()))
-}
-
-/// Splits at the median centroid along the centroids' longest axis, or makes a leaf
-/// when `items` fit in one.
-fn median_split(items: &mut [Item], leaf_size: usize) -> Option<usize> {
+/// Splits at the median centroid along the longest axis of `centroids` (the items'),
+/// or makes a leaf when `items` fit in one.
+fn median_split(items: &mut [Item], centroids: &Aabb, leaf_size: usize) -> Option<usize> {
     if items.len() <= leaf_size {
         return None;
     }
-    let axis = centroid_bounds(items).longest_axis();
+    let axis = centroids.longest_axis();
     let k = items.len() / 2;
     items.select_nth_unstable_by(k, |a, b| a.centroid(axis).total_cmp(&b.centroid(axis)));
     Some(k)
@@ -181,86 +226,118 @@ fn midpoint_split(items: &mut [Item], bounds: &Aabb) -> Option<usize> {
     Some(if separates(k) { k } else { n / 2 })
 }
 
+/// A bin of the SAH sweep: the box of its items, as lanes, and their count.
+type Bin = (Vec3A, Vec3A, usize);
+
+const EMPTY_BIN: Bin = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, 0);
+
+/// A bin's box.
+fn boxed((min, max, _): Bin) -> Aabb {
+    Aabb {
+        min: min.into(),
+        max: max.into(),
+    }
+}
+
 /// Binned SAH over the three axes: the cheapest split, or a leaf when that is cheaper
-/// and the items fit in one.
-fn sah_split(items: &mut [Item], bounds: &Aabb) -> Option<usize> {
+/// and the items fit in one. Only the bins that items fall in are swept (most are empty
+/// in the many small nodes), which gives the costs, and so the split, of a sweep over all.
+fn sah_split(items: &mut [Item], boxes: &Boxes) -> Option<Split> {
     let n = items.len();
     if n == 1 {
         return None;
     }
-    let centroids = centroid_bounds(items);
+    let centroids = boxes.centroids;
     let extent = centroids.extent();
-    let node_area = bounds.area().max(f32::MIN_POSITIVE);
+    let node_area = boxes.bounds.area().max(f32::MIN_POSITIVE);
     let bin_of = |c: f32, axis: usize| {
         let b = ((c - centroids.min[axis]) / extent[axis] * BINS as f32) as usize;
         b.min(BINS - 1)
     };
-    // Every axis's bins in one pass over the items: each item's centroid is computed
-    // once, and the axes' bins are filled from it as three passes filled them (an axis
-    // without extent fills bins that are never read).
-    let mut bins = [[(Aabb::EMPTY, 0usize); BINS]; 3];
+    // Every axis's bins in one pass over the items, the three axes side by side in the
+    // lanes of a vector: each lane computes what `bin_of` does, and the boxes' unions
+    // are exact (an axis without extent fills bins that are never read). A bit a bin
+    // says it holds items.
+    let mut bins = [[EMPTY_BIN; BINS]; 3];
+    let mut used = [0u32; 3];
+    let (low, size) = (Vec3A::from(centroids.min), Vec3A::from(extent));
     for it in items.iter() {
-        let c = it.bounds.centre();
+        let (min, max) = (Vec3A::from(it.bounds.min), Vec3A::from(it.bounds.max));
+        let place = (0.5 * (min + max) - low) / size * BINS as f32;
         for (axis, axis_bins) in bins.iter_mut().enumerate() {
-            let b = &mut axis_bins[bin_of(c[axis], axis)];
-            b.0 = b.0.union(it.bounds);
-            b.1 += 1;
+            let i = (place[axis] as usize).min(BINS - 1);
+            let b = &mut axis_bins[i];
+            (b.0, b.1, b.2) = (b.0.min(min), b.1.max(max), b.2 + 1);
+            used[axis] |= 1 << i;
         }
     }
-    // (cost, axis, last bin on the left)
-    let mut best: Option<(f32, usize, usize)> = None;
+    // (cost, axis, last bin on the left, the two sides' boxes)
+    let mut best: Option<(f32, usize, usize, Aabb, Aabb)> = None;
     for (axis, bins) in bins.iter().enumerate() {
         if !(extent[axis] > 0.0) {
             continue;
         }
-        // Areas and counts of everything right of each split, swept from the right. An
-        // empty bin changes neither (most are empty in the many small nodes).
-        let mut right = [(0f32, 0usize); BINS];
-        let (mut acc, mut count) = (Aabb::EMPTY, 0);
-        let mut area = acc.area();
-        for i in (1..BINS).rev() {
-            if bins[i].1 > 0 {
-                acc = acc.union(bins[i].0);
-                count += bins[i].1;
-                area = acc.area();
-            }
-            right[i] = (area, count);
+        // The bins with items, left to right; everything right of each, swept from the
+        // right: a split after an empty bin costs what the one before it did, and only
+        // a cheaper one replaces the best.
+        let mut full = [0usize; BINS];
+        let mut m = 0;
+        let mut bits = used[axis];
+        while bits != 0 {
+            full[m] = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            m += 1;
         }
-        let (mut acc, mut count) = (Aabb::EMPTY, 0);
-        for i in 0..BINS - 1 {
-            // After an empty bin a split costs what the one before it did, and only a
-            // cheaper one replaces the best.
-            if bins[i].1 == 0 {
-                continue;
-            }
-            acc = acc.union(bins[i].0);
-            count += bins[i].1;
-            let (right_area, right_count) = right[i + 1];
-            if count == 0 || right_count == 0 {
-                continue;
-            }
+        let add =
+            |(min, max, count): Bin, bin: Bin| (min.min(bin.0), max.max(bin.1), count + bin.2);
+        let mut right = [(Aabb::EMPTY, 0usize); BINS];
+        let mut acc = EMPTY_BIN;
+        for j in (1..m).rev() {
+            acc = add(acc, bins[full[j]]);
+            right[j] = (boxed(acc), acc.2);
+        }
+        let mut acc = EMPTY_BIN;
+        for j in 0..m.saturating_sub(1) {
+            acc = add(acc, bins[full[j]]);
+            let (left_box, (right_box, right_count)) = (boxed(acc), right[j + 1]);
             let cost = TRAVERSAL_COST
-                + (acc.area() * count as f32 + right_area * right_count as f32) / node_area;
-            if best.is_none_or(|(c, _, _)| cost < c) {
-                best = Some((cost, axis, i));
+                + (left_box.area() * acc.2 as f32 + right_box.area() * right_count as f32)
+                    / node_area;
+            if best.as_ref().is_none_or(|b| cost < b.0) {
+                best = Some((cost, axis, full[j], left_box, right_box));
             }
         }
     }
-    let Some((cost, axis, last_left)) = best else {
+    let Some((cost, axis, last_left, left_bounds, right_bounds)) = best else {
         // Every centroid in one place: no plane separates them.
-        return median_split(items, MAX_LEAF);
+        return median_split(items, &centroids, MAX_LEAF).map(|k| Split::at(items, k));
     };
     if n <= MAX_LEAF && cost >= n as f32 {
         return None;
     }
-    let mut k = 0;
+    // The items in place, each side's centroids gathered on the way.
+    let (mut k, mut left_centroids, mut right_centroids) = (0, Aabb::EMPTY, Aabb::EMPTY);
     for i in 0..n {
-        if bin_of(items[i].centroid(axis), axis) <= last_left {
+        let c = items[i].bounds.centre();
+        if bin_of(c[axis], axis) <= last_left {
+            left_centroids = left_centroids.grow(c);
             items.swap(i, k);
             k += 1;
+        } else {
+            right_centroids = right_centroids.grow(c);
         }
     }
-    Some(k)
+    Some(Split {
+        k,
+        left: Boxes {
+            bounds: left_bounds,
+            centroids: left_centroids,
+        },
+        right: Boxes {
+            bounds: right_bounds,
+            centroids: right_centroids,
+        },
+    })
 }
 
 #[cfg(test)]
@@ -341,15 +418,21 @@ mod tests {
 
     #[test]
     fn sah_separates_clusters_and_keeps_small_tight_groups_whole() {
+        let split = |items: &mut [Item]| {
+            let boxes = Boxes::of(items);
+            sah_split(items, &boxes).map(|s| {
+                // The boxes found on the way are the boxes of the two sides.
+                assert_eq!(s.left, Boxes::of(&items[..s.k]));
+                assert_eq!(s.right, Boxes::of(&items[s.k..]));
+                s.k
+            })
+        };
         let mut a = items(&[0.0, 0.1, 0.2, 50.0, 50.1]);
-        let bounds = a.iter().fold(Aabb::EMPTY, |b, i| b.union(i.bounds));
-        assert_eq!(sah_split(&mut a, &bounds), Some(3));
+        assert_eq!(split(&mut a), Some(3));
         assert!(a[..3].iter().all(|it| it.centroid(0) < 1.0));
         let mut b = items(&[0.0, 0.01]);
-        let bounds = b.iter().fold(Aabb::EMPTY, |b, i| b.union(i.bounds));
-        assert_eq!(sah_split(&mut b, &bounds), None);
+        assert_eq!(split(&mut b), None);
         let mut same = items(&[1.0; 20]);
-        let bounds = same[0].bounds;
-        assert_eq!(sah_split(&mut same, &bounds), Some(10));
+        assert_eq!(split(&mut same), Some(10));
     }
 }
