@@ -375,7 +375,8 @@ pub struct Settings {
     pub light_samples: u32,
     /// Fuzzy reflections: a reflected direction r becomes normalize(r + G q), q uniform
     /// in the unit ball; G in [0, 1], 0 is a mirror. Without a value: 0.2.
-    #[arg(long, value_name = "G", num_args = 0..=1, default_missing_value = "0.2",
+    #[arg(long, value_name = "G", num_args = 0..=1,
+          default_missing_value = DEFAULT_ROUGHNESS,
           value_parser = parse_roughness, allow_negative_numbers = true)]
     pub roughness: Option<f32>,
     /// Motion blur: the shutter interval; each primary sample takes a time uniform in it,
@@ -554,6 +555,9 @@ const FORMATS: &[(&str, OutputFormat)] = &[
     ("hdr", OutputFormat::Hdr),
     ("exr", OutputFormat::Exr),
 ];
+
+/// The report's roughness when `--roughness` has no value.
+const DEFAULT_ROUGHNESS: &str = "0.2";
 
 /// Parses one of `values` by its name; help, the man page and the completions list the
 /// names as they list a [`ValueEnum`]'s. The library's enums derive no `ValueEnum`, which

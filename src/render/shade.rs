@@ -35,9 +35,6 @@ use crate::simd::{F32x8, Mask8, Vec3x8};
 /// follows the scene's scale and position (P3F.md 4).
 pub const EPS: f32 = 1e-4;
 
-/// The report's roughness when fuzzy reflections are asked for without a value.
-pub const DEFAULT_ROUGHNESS: f32 = 0.2;
-
 /// Which model of shading: P3F.md section 4, or the course renderer's of section 11.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Profile {
