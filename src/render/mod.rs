@@ -275,7 +275,7 @@ pub struct Stage<'s> {
     tracer: Tracer<'s>,
     skybox: Option<Skybox>,
     /// The folder the skybox was found in and loaded from.
-    pub skybox_folder: Option<PathBuf>,
+    skybox_folder: Option<PathBuf>,
     /// What loading the skybox found wrong.
     pub warnings: Vec<String>,
 }
@@ -337,8 +337,9 @@ impl<'s> Stage<'s> {
     }
 
     /// Renders the scene seen by `camera` as `options` says; its structure, shutter,
-    /// profile and mode are the ones the stage was made with. The report's warnings are
-    /// left empty: they are the stage's.
+    /// profile and mode are the ones the stage was made with, and soft lights face the
+    /// scene's own up vector (which an orbit keeps). The report's warnings are left
+    /// empty: they are the stage's.
     pub fn render(
         &self,
         camera: &CameraSpec,
