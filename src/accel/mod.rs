@@ -284,6 +284,24 @@ impl SphereAnswers {
 }
 
 /// Answers ray queries for one scene: the accelerator for bounded primitives, planes apart.
+///
+/// ```
+/// use glam::Vec3;
+/// use p3trace::accel::{AccelKind, AccelOptions, Tracer};
+/// use p3trace::ray::Ray;
+/// use p3trace::scene::Geometry;
+///
+/// // Triangles of your own: one facing +z at z = 0, material 0.
+/// let mut geometry = Geometry::default();
+/// geometry.triangles.push([Vec3::ZERO, Vec3::X, Vec3::Y], None, 0);
+/// let ray = Ray::new(Vec3::new(0.2, 0.2, 1.0), Vec3::NEG_Z);
+/// // Every structure gives brute force's answer.
+/// for kind in [AccelKind::Bvh, AccelKind::Grid, AccelKind::None] {
+///     let tracer = Tracer::new(&geometry, &AccelOptions { kind, ..AccelOptions::default() });
+///     assert_eq!(tracer.closest(&ray, 0.0, f32::INFINITY).map(|hit| hit.t), Some(1.0));
+///     assert!(tracer.occluded(&ray, 0.0, 2.0) && !tracer.occluded(&ray, 0.0, 0.5));
+/// }
+/// ```
 pub struct Tracer<'s> {
     pub geometry: &'s Geometry,
     accel: Accel,

@@ -270,6 +270,29 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RenderReport, St
 
 /// A scene ready to render frame after frame: its structure built and its skybox loaded,
 /// as `options` asked when it was made (structure, shutter, profile, mode).
+///
+/// ```
+/// use p3trace::render::{render, RenderOptions, Sampling, Stage};
+/// use p3trace::render::sampler::SampleGrid;
+/// use p3trace::scene::parse_str;
+///
+/// let text = "v from 0 0 5 at 0 0 0 up 0 1 0 angle 40 hither 0.01 resolution 16 12
+///             l 3 4 5 1 1 1  f 1 0.5 0.2 1 1 1 1 0.3 30 0 1  s 0 0 0 1";
+/// let scene = parse_str(text, "stage", std::path::Path::new(".")).unwrap();
+/// let options = RenderOptions {
+///     sampling: Sampling::Jittered(SampleGrid::square(2)),
+///     ..RenderOptions::from_scene(&scene)
+/// };
+/// // Built once, rendered twice: a sample of each pixel at a time, then the mean of the
+/// // four, in the order `render` adds them, is `render`'s film bit for bit.
+/// let stage = Stage::new(&scene, &options);
+/// let mut sums = p3trace::view::Accumulator::new(16, 12);
+/// for k in 0..4 {
+///     let pass = RenderOptions { samples: Some(k..k + 1), ..options.clone() };
+///     sums.add(&stage.render(&scene.camera, &pass).unwrap().film);
+/// }
+/// assert_eq!(sums.image(), render(&scene, &options).unwrap().film);
+/// ```
 pub struct Stage<'s> {
     scene: &'s Scene,
     tracer: Tracer<'s>,
