@@ -106,9 +106,23 @@ impl SampleGrid {
     }
 
     /// The cells `(p, q)` whose places in the grid's order (row by row: `q * columns + p`)
-    /// are in `places`, in that order.
+    /// are in `places`, in that order. It is called for every pixel: a cell follows the
+    /// one before it, and only a start past the first cell costs a division.
     pub fn cells_in(self, places: std::ops::Range<u32>) -> impl Iterator<Item = (u32, u32)> {
-        places.map(move |k| (k % self.columns, k / self.columns))
+        let columns = self.columns;
+        let mut cell = match places.start {
+            0 => (0, 0),
+            k => (k % columns, k / columns),
+        };
+        places.map(move |_| {
+            let this = cell;
+            cell = if this.0 + 1 == columns {
+                (0, this.1 + 1)
+            } else {
+                (this.0 + 1, this.1)
+            };
+            this
+        })
     }
 }
 
