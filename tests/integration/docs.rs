@@ -1,7 +1,10 @@
 //! The documents as a newcomer meets them: every shell block of README.md and docs/*.md
 //! runs as shown and prints what the document shows, every relative link leads to a
 //! file, the README starts with the two commands it promises (the second the one
-//! `.ci/run` runs), and each document keeps to its length.
+//! `.ci/run` runs), and each document keeps to its length. And the documents as
+//! references: a figure that README.md or docs/ quotes from BENCHMARKS.md is as
+//! BENCHMARKS.md's section says it ([`contradictions`]), and prose names no commit
+//! ([`commits_in_prose`]).
 //!
 //! A block opened with ```` ```sh ```` runs unless the line before it is
 //! `<!-- not run: REASON -->`. It runs under `bash -euo pipefail` in a scratch folder
@@ -402,4 +405,269 @@ fn the_documents_keep_to_their_length() {
             .count();
         assert!(lines <= most, "{document}: {lines} lines, at most {most}");
     }
+}
+
+/// A document's prose in the units the checks below read, each with its line: every heading
+/// and table row, and every sentence (ended by `. `) of a paragraph or list item; code blocks
+/// and HTML comments left out.
+fn prose(markdown: &str) -> Vec<(usize, String)> {
+    fn flush(paragraph: &mut Vec<&str>, line: usize, units: &mut Vec<(usize, String)>) {
+        let text = paragraph.join(" ");
+        units.extend(
+            (text.split(". "))
+                .filter(|sentence| !sentence.trim().is_empty())
+                .map(|sentence| (line, sentence.to_string())),
+        );
+        paragraph.clear();
+    }
+    let mut units = Vec::new();
+    let mut paragraph: Vec<&str> = Vec::new();
+    let mut first = 0;
+    let mut in_code = false;
+    for (number, line) in markdown.lines().enumerate() {
+        let line = line.trim();
+        let code_fence = line.starts_with("```");
+        let own_unit = line.starts_with('|') || line.starts_with('#');
+        if code_fence || in_code || own_unit || line.is_empty() || line.starts_with("<!--") {
+            flush(&mut paragraph, first, &mut units);
+        }
+        in_code ^= code_fence;
+        if code_fence || in_code || line.is_empty() || line.starts_with("<!--") {
+            continue;
+        }
+        if own_unit {
+            units.push((number + 1, line.to_string()));
+            continue;
+        }
+        if line.starts_with("- ") {
+            flush(&mut paragraph, first, &mut units);
+        }
+        if paragraph.is_empty() {
+            first = number + 1;
+        }
+        paragraph.push(line);
+    }
+    flush(&mut paragraph, first, &mut units);
+    units
+}
+
+/// The targets of a text's Markdown links: `[text](TARGET)`.
+fn link_targets(text: &str) -> Vec<&str> {
+    (text.split("](").skip(1))
+        .filter_map(|rest| rest.split(')').next())
+        .collect()
+}
+
+/// The text with its `code` spans and its links' targets left out: what it says in words
+/// and figures.
+fn words_and_figures(text: &str) -> String {
+    let words: String = (text.split('`').step_by(2)).collect::<Vec<_>>().join(" ");
+    let mut pieces = words.split("](");
+    let mut kept = pieces.next().unwrap_or_default().to_string();
+    for piece in pieces {
+        kept.push_str(piece.split_once(')').map_or("", |(_, after)| after));
+    }
+    kept
+}
+
+/// The numbers of a text as written (`1,422,603`, `0.160`, `3.13.5`; not the digits of a
+/// word such as `x86` or `packet16`), each with whether an `x` follows it as a ratio's
+/// (`1.80x`, not `4x2`).
+fn numbers(text: &str) -> Vec<(String, bool)> {
+    let chars: Vec<char> = text.chars().collect();
+    let digit_at = |i: usize| chars.get(i).is_some_and(char::is_ascii_digit);
+    let mut found = Vec::new();
+    let mut i = 0;
+    while i < chars.len() {
+        let in_word =
+            i > 0 && (chars[i - 1].is_alphanumeric() || matches!(chars[i - 1], '_' | '.'));
+        if !digit_at(i) || in_word {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while digit_at(i) || (matches!(chars.get(i), Some('.' | ',')) && digit_at(i + 1)) {
+            i += 1;
+        }
+        let ratio =
+            chars.get(i) == Some(&'x') && !chars.get(i + 1).is_some_and(|c| c.is_alphanumeric());
+        found.push((chars[start..i].iter().collect(), ratio));
+    }
+    found
+}
+
+/// A heading's anchor, as GitHub makes it: lower case, spaces as `-`, punctuation left out.
+fn anchor(heading: &str) -> String {
+    (heading
+        .trim_start_matches('#')
+        .trim()
+        .to_lowercase()
+        .chars())
+    .filter_map(|c| match c {
+        ' ' => Some('-'),
+        c if c.is_alphanumeric() || c == '-' || c == '_' => Some(c),
+        _ => None,
+    })
+    .collect()
+}
+
+/// A document's sections by their anchors: each heading with the text under it to the next
+/// heading of its level or above (its subsections included).
+fn sections(markdown: &str) -> Vec<(String, String)> {
+    let lines: Vec<&str> = markdown.lines().collect();
+    let mut headings = Vec::new();
+    let mut in_code = false;
+    for (i, line) in lines.iter().enumerate() {
+        in_code ^= line.trim_start().starts_with("```");
+        let level = line.chars().take_while(|&c| c == '#').count();
+        if !in_code && level > 0 && line[level..].starts_with(' ') {
+            headings.push((i, level));
+        }
+    }
+    (headings.iter().enumerate())
+        .map(|(k, &(start, level))| {
+            let end = (headings[k + 1..].iter())
+                .find(|&&(_, other)| other <= level)
+                .map_or(lines.len(), |&(i, _)| i);
+            (anchor(lines[start]), lines[start..end].join("\n"))
+        })
+        .collect()
+}
+
+/// What `markdown` (the document `name`) quotes from BENCHMARKS.md (`benchmarks`) that
+/// BENCHMARKS.md does not say, one line each. A sentence or table row that links to
+/// `BENCHMARKS.md#SECTION` quotes that section: every number of its words (not its `code`)
+/// written with a decimal point, or as a ratio `1.80x`, must be one of the section's numbers
+/// as written there (1.4 is not 1.40), and the section must exist; a link without
+/// `#SECTION` stands for the whole file. A sentence that names figures of BENCHMARKS.md
+/// without such a link is not checked: it should link instead.
+fn contradictions(name: &str, markdown: &str, benchmarks: &str) -> Vec<String> {
+    let sections = sections(benchmarks);
+    let numbers_of = |text: &str| -> std::collections::HashSet<String> {
+        numbers(text)
+            .into_iter()
+            .map(|(number, _)| number)
+            .collect()
+    };
+    let mut found = Vec::new();
+    for (line, unit) in prose(markdown) {
+        let quoted: Vec<&str> = (link_targets(&unit).into_iter())
+            .filter(|target| target.split('#').next().unwrap().ends_with("BENCHMARKS.md"))
+            .collect();
+        let mut held = std::collections::HashSet::new();
+        for target in &quoted {
+            match target.split_once('#') {
+                None => held.extend(numbers_of(benchmarks)),
+                Some((_, wanted)) => match sections.iter().find(|(anchor, _)| anchor == wanted) {
+                    Some((_, text)) => held.extend(numbers_of(text)),
+                    None => found.push(format!(
+                        "{name}:{line}: BENCHMARKS.md has no section #{wanted}"
+                    )),
+                },
+            }
+        }
+        if quoted.is_empty() {
+            continue;
+        }
+        for (figure, ratio) in numbers(&words_and_figures(&unit)) {
+            if (figure.contains('.') || ratio) && !held.contains(&figure) {
+                found.push(format!(
+                    "{name}:{line}: {figure} is not in the part of BENCHMARKS.md it links to ({}): {unit}",
+                    quoted.join(", ")
+                ));
+            }
+        }
+    }
+    found
+}
+
+/// The README and docs/ quote no figure that BENCHMARKS.md contradicts ([`contradictions`]):
+/// a figure lives in BENCHMARKS.md, and a sentence that gives it again links to its section
+/// and gives it as written there.
+#[test]
+fn quoted_figures_agree_with_benchmarks() {
+    let benchmarks = std::fs::read_to_string(project_file("BENCHMARKS.md")).unwrap();
+    let found: Vec<String> = (documents().into_iter())
+        .flat_map(|document| {
+            let text = std::fs::read_to_string(project_file(&document)).unwrap();
+            contradictions(&document, &text, &benchmarks)
+        })
+        .collect();
+    assert!(found.is_empty(), "{}", found.join("\n"));
+}
+
+/// Whether a word is a commit's abbreviated or full hash: 7 to 40 hexadecimal digits, at
+/// least one a letter and one a digit.
+fn is_commit(word: &str) -> bool {
+    (7..=40).contains(&word.len())
+        && word
+            .chars()
+            .all(|c| c.is_ascii_digit() || ('a'..='f').contains(&c))
+        && word.chars().any(|c| c.is_ascii_digit())
+        && word.chars().any(|c| c.is_ascii_alphabetic())
+}
+
+/// The commits `markdown` names in its prose, one line each: a commit belongs in a table (a
+/// measured column) or in a sentence that starts `Measured`, which says where a figure was
+/// measured; prose states what is, and git keeps the history.
+fn commits_in_prose(name: &str, markdown: &str) -> Vec<String> {
+    (prose(markdown).into_iter())
+        .filter(|(_, unit)| !unit.starts_with('|'))
+        .filter(|(_, unit)| {
+            !unit
+                .trim_start_matches(['*', '(', ' '])
+                .starts_with("Measured")
+        })
+        .flat_map(|(line, unit)| {
+            (unit.split(|c: char| !c.is_ascii_alphanumeric()))
+                .filter(|word| is_commit(word))
+                .map(|commit| format!("{name}:{line}: {commit} in: {unit}"))
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// The documents name commits only where they say where a figure was measured
+/// ([`commits_in_prose`]); docs/did-not-pay.md, the record of experiments, names theirs.
+#[test]
+fn prose_names_no_commit() {
+    let mut pages = documents();
+    pages.extend(["BENCHMARKS.md", "ARCHITECTURE.md", "CONTRIBUTING.md"].map(String::from));
+    let found: Vec<String> = (pages.into_iter())
+        .filter(|page| page != "docs/did-not-pay.md")
+        .flat_map(|page| {
+            let text = std::fs::read_to_string(project_file(&page)).unwrap();
+            commits_in_prose(&page, &text)
+        })
+        .collect();
+    assert!(found.is_empty(), "{}", found.join("\n"));
+}
+
+/// The two checks above catch what they are for, and pass what they should.
+#[test]
+fn a_contradicting_quote_or_a_commit_in_prose_is_caught() {
+    let benchmarks = "# Benchmarks\n\n## Trace throughput\n\nMeans 1.43 and 1.44 (`--reps 7`).\n\n\
+                      ### Agreement\n\nTsums within 0.01%.\n\n## Memory\n\n135.9 bytes a sphere.\n";
+    let agrees = "It leads by 1.43-1.44x, tsums within 0.01%\n\
+                  ([the figures](BENCHMARKS.md#trace-throughput)). It is 9.99 times as nice.\n\n\
+                  | the heap | 135.9 bytes | [memory](../BENCHMARKS.md#memory) |\n\n\
+                  Run it with `--roughness 0.2` ([how](BENCHMARKS.md)).\n";
+    let found = contradictions("doc", agrees, benchmarks);
+    assert!(found.is_empty(), "{found:?}");
+    for contradicting in [
+        "It leads by 1.45x ([the figures](BENCHMARKS.md#trace-throughput)).",
+        "It takes 135.9 bytes ([the figures](BENCHMARKS.md#trace-throughput)).",
+        "It leads by 1.4 ([the figures](../BENCHMARKS.md#trace-throughput)).",
+        "| the lead | 2x | [the figures](BENCHMARKS.md#trace-throughput) |",
+        "It leads by 1.43 ([the figures](BENCHMARKS.md#speed)).",
+        "- It leads\n  by 1.50 ([the figures](BENCHMARKS.md)).",
+    ] {
+        let found = contradictions("doc", contradicting, benchmarks);
+        assert!(!found.is_empty(), "not caught: {contradicting}");
+    }
+    let prose = "Measured: Xeon, 07a60ac, 2026-12-03. It is faster since\n07a60ac.\n\n\
+                 | run | 07a60ac |\n\n**Measured at 1a2b3c4d**. 1048576 rays, `x86-64-v3`.\n";
+    let found = commits_in_prose("doc", prose);
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(found[0].starts_with("doc:1: 07a60ac"), "{found:?}");
 }
