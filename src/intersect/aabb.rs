@@ -239,6 +239,12 @@ impl Shapes for Boxes {
         self.material.len()
     }
 
+    fn shrink_to_fit(&mut self) {
+        self.min.shrink_to_fit();
+        self.max.shrink_to_fit();
+        self.material.shrink_to_fit();
+    }
+
     fn material(&self, i: usize) -> u32 {
         self.material[i]
     }

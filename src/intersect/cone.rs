@@ -161,6 +161,15 @@ impl Shapes for Cones {
         self.material.len()
     }
 
+    fn shrink_to_fit(&mut self) {
+        self.base.shrink_to_fit();
+        self.axis.shrink_to_fit();
+        self.height.shrink_to_fit();
+        self.r_base.shrink_to_fit();
+        self.r_apex.shrink_to_fit();
+        self.material.shrink_to_fit();
+    }
+
     fn material(&self, i: usize) -> u32 {
         self.material[i]
     }

@@ -94,6 +94,10 @@ pub trait Shapes {
         self.len() == 0
     }
 
+    /// Gives back the room its arrays grew beyond what they hold: a reader calls it once
+    /// a scene is read, so that the doubling of growth is not held while a scene renders.
+    fn shrink_to_fit(&mut self);
+
     /// Primitive `i`'s material.
     fn material(&self, i: usize) -> u32;
 
@@ -317,6 +321,12 @@ impl Vec3s {
 
     pub fn is_empty(&self) -> bool {
         self.x.is_empty()
+    }
+
+    pub fn shrink_to_fit(&mut self) {
+        self.x.shrink_to_fit();
+        self.y.shrink_to_fit();
+        self.z.shrink_to_fit();
     }
 }
 

@@ -36,6 +36,15 @@ impl Shapes for MovingSpheres {
         self.material.len()
     }
 
+    fn shrink_to_fit(&mut self) {
+        self.centre0.shrink_to_fit();
+        self.centre1.shrink_to_fit();
+        self.radius.shrink_to_fit();
+        self.time0.shrink_to_fit();
+        self.time1.shrink_to_fit();
+        self.material.shrink_to_fit();
+    }
+
     fn material(&self, i: usize) -> u32 {
         self.material[i]
     }

@@ -51,6 +51,12 @@ impl Shapes for Planes {
         self.material.len()
     }
 
+    fn shrink_to_fit(&mut self) {
+        self.normal.shrink_to_fit();
+        self.offset.shrink_to_fit();
+        self.material.shrink_to_fit();
+    }
+
     fn material(&self, i: usize) -> u32 {
         self.material[i]
     }

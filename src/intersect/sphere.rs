@@ -420,6 +420,10 @@ impl Shapes for Spheres {
         self.records.len()
     }
 
+    fn shrink_to_fit(&mut self) {
+        self.records.shrink_to_fit();
+    }
+
     fn material(&self, i: usize) -> u32 {
         self.records[i].material
     }

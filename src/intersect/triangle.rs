@@ -877,6 +877,11 @@ impl Shapes for Triangles {
         self.records.len()
     }
 
+    fn shrink_to_fit(&mut self) {
+        self.records.shrink_to_fit();
+        self.vertex_normals.shrink_to_fit();
+    }
+
     fn material(&self, i: usize) -> u32 {
         self.records[i].material
     }

@@ -23,6 +23,11 @@ macro_rules! define_geometry {
         }
 
         impl Geometry {
+            /// Gives back what every storage grew beyond its primitives ([`Shapes::shrink_to_fit`]).
+            pub fn shrink_to_fit(&mut self) {
+                $(self.$field.shrink_to_fit();)*
+            }
+
             /// How many primitives of `kind` there are.
             pub fn count(&self, kind: PrimKind) -> usize {
                 match kind {

@@ -137,6 +137,7 @@ pub fn parse_str_in(text: &str, name: &str, base_dir: &Path, frame: Frame) -> Re
         parser.scene.origin = camera_position(text);
     }
     parser.parse()?;
+    parser.scene.geometry.shrink_to_fit();
     Ok(parser.scene)
 }
 

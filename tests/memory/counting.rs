@@ -4,7 +4,7 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use p3trace::render::{render, RenderOptions, RenderReport};
+use p3trace::render::{RenderOptions, RenderReport, Stage};
 use p3trace::scene::Scene;
 
 /// The system allocator, counting the bytes held now and at most.
@@ -67,9 +67,9 @@ pub fn held_since(before: usize) -> usize {
     HELD.load(Ordering::Relaxed) - before
 }
 
-/// Renders `scene` as its file asks, then prints and checks the heap at the peak since
-/// [`start`] returned `before`, per primitive of the `count` of `kind`: at most
-/// `max_bytes` each.
+/// Renders `scene` as its file asks, then prints the heap held once the scene is stored
+/// and once its structure is built, and checks the heap at the peak since [`start`]
+/// returned `before`, per primitive of the `count` of `kind`: at most `max_bytes` each.
 pub fn render_within(
     scene: &Scene,
     before: usize,
@@ -78,15 +78,19 @@ pub fn render_within(
     max_bytes: f64,
 ) -> RenderReport {
     let stored = held_since(before);
-    let report = render(scene, &RenderOptions::from_scene(scene)).unwrap();
+    let options = RenderOptions::from_scene(scene);
+    let stage = Stage::new(scene, &options);
+    let built = held_since(before);
+    let report = stage.render(&scene.camera, &options).unwrap();
     let peak = peak_since(before);
     let each = peak as f64 / count as f64;
     eprintln!(
-        "{}: stored in {:.0} MB ({:.1} bytes each); peak of the render {:.0} MB, \
-         {each:.1} bytes per {kind}; {} in {:.1} s",
+        "{}: stored in {:.0} MB ({:.1} bytes each), {:.1} bytes each held once built; \
+         peak of the render {:.0} MB, {each:.1} bytes per {kind}; {} in {:.1} s",
         scene.name,
         stored as f64 / 1e6,
         stored as f64 / count as f64,
+        built as f64 / count as f64,
         peak as f64 / 1e6,
         report.accel_name,
         (report.build_time + report.elapsed).as_secs_f64()

@@ -2,8 +2,9 @@
 //! node's two children, and the child with the largest surface area is replaced by its
 //! own two children while fewer than eight remain and some child is interior (Wald et
 //! al., "Getting Rid of Packets", 2008). The binary tree is consumed: its primitive order
-//! is kept, its nodes freed once converted. A first pass counts the 8-wide tree's nodes
-//! and packs, so that its arrays are allocated once at their size.
+//! is kept, and its nodes are freed once the 8-wide nodes are made, before the packs are
+//! filled, so that the two largest arrays are never held at once. A first pass counts the
+//! 8-wide tree's nodes and packs, so that its arrays are allocated once at their size.
 
 use std::ops::Range;
 
@@ -55,21 +56,30 @@ impl Bvh8 {
         let mut tree = Bvh8 {
             nodes: Vec::with_capacity(size.nodes),
             prims: Vec::new(),
-            leaves: Leaves::with_capacity(&size.packs),
+            leaves: Leaves::with_capacity(&PackCounts::default()),
             depth: 0,
             build,
             binary: stats,
         };
+        let mut packs = Vec::with_capacity(size.packs.iter().sum());
         if !root_kids.is_empty() {
-            tree.depth = tree.emit(geometry, &binary, root_kids);
+            tree.depth = tree.emit(&binary, root_kids, &mut packs);
+        }
+        drop(nodes);
+        tree.leaves = Leaves::with_capacity(&size.packs);
+        for pack in packs {
+            let ids = &prims[pack.start as usize..][..pack.len as usize];
+            tree.nodes[pack.node as usize].child[pack.slot as usize] =
+                tree.leaves.push(geometry, ids);
         }
         tree.prims = prims;
         Ok(tree)
     }
 
     /// Appends the node over the binary nodes `start` (expanded by [`Binary::expand`])
-    /// and its subtrees; returns the subtree's depth.
-    fn emit(&mut self, geometry: &Geometry, binary: &Binary, start: Vec<Kid>) -> usize {
+    /// and its subtrees, and to `packs` the packs its leaves will hold, in the order they
+    /// are to be stored; returns the subtree's depth.
+    fn emit(&mut self, binary: &Binary, start: Vec<Kid>, packs: &mut Vec<PackToFill>) -> usize {
         let kids = binary.expand(start);
         let index = self.nodes.len();
         let boxes: Vec<(Vec3, Vec3)> = kids
@@ -87,13 +97,22 @@ impl Bvh8 {
         let mut depth = 1;
         for (k, kid) in kids.iter().enumerate() {
             let child = match binary.pack_kind(kid) {
-                Some(_) => self.leaves.push(geometry, &binary.prims[kid.range.clone()]),
+                Some(_) => {
+                    packs.push(PackToFill {
+                        node: index as u32,
+                        slot: k as u8,
+                        len: kid.range.len() as u8,
+                        start: kid.range.start as u32,
+                    });
+                    // Until the packs are filled.
+                    0
+                }
                 None if binary.nodes[kid.node].is_leaf() => {
                     leaf_ref(RUN, kid.range.len(), kid.range.start)
                 }
                 None => {
                     let child = self.nodes.len() as u32;
-                    depth = depth.max(1 + self.emit(geometry, binary, binary.children(kid)));
+                    depth = depth.max(1 + self.emit(binary, binary.children(kid), packs));
                     child
                 }
             };
@@ -105,6 +124,15 @@ impl Bvh8 {
 
 /// The most primitives of one kind stored side by side in a leaf.
 const PACK: usize = 8;
+
+/// A pack to fill once the binary nodes are freed: its primitives, `len` from `start` in
+/// the primitive order, and the child `slot` of `node` that will refer to it.
+struct PackToFill {
+    node: u32,
+    slot: u8,
+    len: u8,
+    start: u32,
+}
 
 /// A node of the binary tree and the run of primitives under it.
 #[derive(Clone)]
