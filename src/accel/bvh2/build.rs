@@ -2,7 +2,7 @@
 //! SAH. Both write nodes depth first into one array, allocated once, and reorder the
 //! primitives so that each leaf's are contiguous.
 
-use glam::Vec3A;
+use glam::{Vec3, Vec3A};
 
 use super::{BvhBuild, Node, TRAVERSAL_COST};
 use crate::accel::bounds::prim_bounds;
@@ -250,22 +250,24 @@ fn sah_split(items: &mut [Item], boxes: &Boxes) -> Option<Split> {
     let centroids = boxes.centroids;
     let extent = centroids.extent();
     let node_area = boxes.bounds.area().max(f32::MIN_POSITIVE);
-    let bin_of = |c: f32, axis: usize| {
-        let b = ((c - centroids.min[axis]) / extent[axis] * BINS as f32) as usize;
-        b.min(BINS - 1)
+    // An item's bin on each axis, the three side by side in the lanes of a vector: where
+    // its centroid falls, and the centroid itself. The binning and the partition below
+    // both ask it, so that an item goes to the side of its bin.
+    let (low, size) = (Vec3A::from(centroids.min), Vec3A::from(extent));
+    let place_of = |bounds: &Aabb| {
+        let centre = 0.5 * (Vec3A::from(bounds.min) + Vec3A::from(bounds.max));
+        ((centre - low) / size * BINS as f32, centre)
     };
-    // Every axis's bins in one pass over the items, the three axes side by side in the
-    // lanes of a vector: each lane computes what `bin_of` does, and the boxes' unions
-    // are exact (an axis without extent fills bins that are never read). A bit a bin
-    // says it holds items.
+    let bin = |place: f32| (place as usize).min(BINS - 1);
+    // Every axis's bins in one pass over the items; the boxes' unions are exact (an axis
+    // without extent fills bins that are never read). A bit a bin says it holds items.
     let mut bins = [[EMPTY_BIN; BINS]; 3];
     let mut used = [0u32; 3];
-    let (low, size) = (Vec3A::from(centroids.min), Vec3A::from(extent));
     for it in items.iter() {
         let (min, max) = (Vec3A::from(it.bounds.min), Vec3A::from(it.bounds.max));
-        let place = (0.5 * (min + max) - low) / size * BINS as f32;
+        let (place, _) = place_of(&it.bounds);
         for (axis, axis_bins) in bins.iter_mut().enumerate() {
-            let i = (place[axis] as usize).min(BINS - 1);
+            let i = bin(place[axis]);
             let b = &mut axis_bins[i];
             (b.0, b.1, b.2) = (b.0.min(min), b.1.max(max), b.2 + 1);
             used[axis] |= 1 << i;
@@ -318,8 +320,9 @@ fn sah_split(items: &mut [Item], boxes: &Boxes) -> Option<Split> {
     // The items in place, each side's centroids gathered on the way.
     let (mut k, mut left_centroids, mut right_centroids) = (0, Aabb::EMPTY, Aabb::EMPTY);
     for i in 0..n {
-        let c = items[i].bounds.centre();
-        if bin_of(c[axis], axis) <= last_left {
+        let (place, centre) = place_of(&items[i].bounds);
+        let c = Vec3::from(centre);
+        if bin(place[axis]) <= last_left {
             left_centroids = left_centroids.grow(c);
             items.swap(i, k);
             k += 1;
