@@ -152,12 +152,12 @@ impl Accel {
                 options.intersect.sphere_margin,
             )),
             AccelKind::Bvh => {
+                let (build, shutter) = (options.bvh, options.shutter);
                 let margin = options.intersect.sphere_margin;
-                let bvh2 = Bvh2::build(geometry, options.bvh, options.shutter, margin);
                 match options.bvh_width.unwrap_or(default_width(options.bvh)) {
-                    BvhWidth::Two => Accel::Bvh2(bvh2),
+                    BvhWidth::Two => Accel::Bvh2(Bvh2::build(geometry, build, shutter, margin)),
                     // A tree too large for the 8-wide encoding stays binary.
-                    BvhWidth::Eight => match Bvh8::collapse(bvh2, geometry) {
+                    BvhWidth::Eight => match Bvh8::build(geometry, build, shutter, margin) {
                         Ok(bvh8) => Accel::Bvh8(bvh8),
                         Err(bvh2) => Accel::Bvh2(bvh2),
                     },

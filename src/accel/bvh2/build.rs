@@ -22,6 +22,29 @@ const FREE_DEPTH: usize = 64;
 /// Subtrees over more primitives than this are built on two threads.
 const PARALLEL_BUILD: usize = 4096;
 
+/// How a build splits: its kind, and the most primitives of one packed kind
+/// ([`PrimKind::is_packed`]) that it leaves unsplit, 0 for none. A tree to be collapsed
+/// into the 8-wide one stops there, as the collapse makes such a subtree one pack whatever
+/// lies below it: the same packs and 8-wide nodes, for fewer binary nodes and splits.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Rules {
+    pub build: BvhBuild,
+    pub pack_leaves: usize,
+}
+
+impl Rules {
+    /// Whether `items` are left a leaf for a pack.
+    fn is_pack_leaf(&self, items: &[Item]) -> bool {
+        let Some(first) = items.first() else {
+            return false;
+        };
+        let kind = first.prim.kind();
+        items.len() <= self.pack_leaves
+            && kind.is_packed()
+            && items.iter().all(|it| it.prim.kind() == kind)
+    }
+}
+
 /// A primitive during the build: 28 bytes, for the items and the nodes are the build's
 /// largest arrays. The centroid is the box's centre, recomputed where it is needed.
 #[derive(Clone, Copy)]
@@ -94,7 +117,7 @@ const UNUSED: Node = Node {
 /// `sphere_margin`) is not empty.
 pub(super) fn build(
     geometry: &Geometry,
-    build: BvhBuild,
+    rules: Rules,
     shutter: [f32; 2],
     sphere_margin: f32,
 ) -> (Vec<Node>, Vec<PrimId>) {
@@ -113,7 +136,7 @@ pub(super) fn build(
     let mut nodes = vec![UNUSED; (2 * items.len()).saturating_sub(1)];
     if !items.is_empty() {
         let boxes = Boxes::of(&items);
-        let used = grow(&mut nodes, 0, &mut items, boxes, 0, 0, build);
+        let used = grow(&mut nodes, 0, &mut items, boxes, 0, 0, rules);
         nodes.truncate(used);
     }
     let prims = items.iter().map(|it| it.prim).collect();
@@ -134,7 +157,7 @@ fn grow(
     boxes: Boxes,
     offset: usize,
     depth: usize,
-    build: BvhBuild,
+    rules: Rules,
 ) -> usize {
     let bounds = boxes.bounds;
     nodes[0] = Node {
@@ -143,14 +166,16 @@ fn grow(
         max: bounds.max.to_array(),
         count: items.len() as u32,
     };
-    let leaf_size = match build {
+    let leaf_size = match rules.build {
         BvhBuild::Midpoint => MIDPOINT_LEAF,
         BvhBuild::Sah => MAX_LEAF,
     };
-    let split = if depth >= FREE_DEPTH {
+    let split = if rules.is_pack_leaf(items) {
+        None
+    } else if depth >= FREE_DEPTH {
         median_split(items, &boxes.centroids, leaf_size).map(|k| Split::at(items, k))
     } else {
-        match build {
+        match rules.build {
             BvhBuild::Midpoint => midpoint_split(items, &bounds).map(|k| Split::at(items, k)),
             BvhBuild::Sah => sah_split(items, &boxes),
         }
@@ -161,7 +186,7 @@ fn grow(
     let k = split.k;
     let (left, right) = items.split_at_mut(k);
     let child = |nodes: &mut [Node], base, items: &mut [Item], boxes, offset| {
-        grow(nodes, base, items, boxes, offset, depth + 1, build)
+        grow(nodes, base, items, boxes, offset, depth + 1, rules)
     };
     let (left_used, right_used) = if left.len() + right.len() > PARALLEL_BUILD {
         // The two subtrees on two threads, the right one after the most room the left

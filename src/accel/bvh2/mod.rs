@@ -146,7 +146,24 @@ impl Bvh2 {
         shutter: [f32; 2],
         sphere_margin: f32,
     ) -> Bvh2 {
-        let (nodes, prims) = build::build(geometry, build, shutter, sphere_margin);
+        Self::build_for_packs(geometry, build, shutter, sphere_margin, 0)
+    }
+
+    /// [`Bvh2::build`] for a tree to be collapsed into packs of up to `pack_size`
+    /// primitives: a subtree of that many or fewer of one packed kind is left a leaf,
+    /// which is what the collapse makes of it.
+    pub fn build_for_packs(
+        geometry: &Geometry,
+        build: BvhBuild,
+        shutter: [f32; 2],
+        sphere_margin: f32,
+        pack_size: usize,
+    ) -> Bvh2 {
+        let rules = build::Rules {
+            build,
+            pack_leaves: pack_size,
+        };
+        let (nodes, prims) = build::build(geometry, rules, shutter, sphere_margin);
         Bvh2 {
             nodes,
             prims,

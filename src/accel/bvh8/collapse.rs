@@ -13,12 +13,24 @@ use glam::Vec3;
 use super::leaves::{count_index, Leaves, PackCounts};
 use super::node::{leaf_ref, Node8, MAX_LEAF_PRIMS, MAX_PRIMS, RUN, WIDTH};
 use super::Bvh8;
-use crate::accel::bvh2::{Bvh2, Node};
+use crate::accel::bvh2::{Bvh2, BvhBuild, Node};
 use crate::intersect::BoxPack8;
 use crate::prim::{PrimId, PrimKind};
 use crate::scene::Geometry;
 
 impl Bvh8 {
+    /// The tree over `geometry` as [`Bvh2::build`] takes it, built binary as far as the
+    /// packs and collapsed; the binary tree when it does not fit ([`Bvh8::collapse`]).
+    pub fn build(
+        geometry: &Geometry,
+        build: BvhBuild,
+        shutter: [f32; 2],
+        sphere_margin: f32,
+    ) -> Result<Bvh8, Bvh2> {
+        let bvh2 = Bvh2::build_for_packs(geometry, build, shutter, sphere_margin, PACK);
+        Self::collapse(bvh2, geometry)
+    }
+
     /// Converts the binary tree `bvh2`, which it consumes, or gives it back when it has
     /// more primitives, or larger leaves, than the child references can encode.
     pub fn collapse(bvh2: Bvh2, geometry: &Geometry) -> Result<Bvh8, Bvh2> {
@@ -228,7 +240,6 @@ impl Binary<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::bvh2::BvhBuild;
     use crate::accel::bvh8::node::{leaf_parts, LEAF};
     use crate::scene::p3f::parse_text;
 
