@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use p3trace::accel::count::Counter;
+use p3trace::accel::count::{CostRays, Counter};
 use p3trace::accel::{AccelKind, AccelOptions, BvhBuild, BvhWidth};
 use p3trace::generate::skybox::Up;
 use p3trace::generate::{mountain, sphereflake};
@@ -16,7 +16,7 @@ use p3trace::render::film::OutputFormat;
 use p3trace::render::light::{DEFAULT_LIGHT_GRID, DEFAULT_LIGHT_SIZE};
 use p3trace::render::region::TileIndex;
 use p3trace::render::shade::Profile;
-use p3trace::render::{CostRays, RenderMode};
+use p3trace::render::RenderMode;
 
 #[derive(Parser, Debug)]
 #[command(

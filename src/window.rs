@@ -25,11 +25,11 @@ use notify::{RecommendedWatcher, RecursiveMode, Watcher};
 
 use crate::cli::ViewArgs;
 use crate::Failure;
-use p3trace::accel::count::Counter;
+use p3trace::accel::count::{CostRays, Counter};
 use p3trace::accel::AccelKind;
 use p3trace::render::cost::{self, CostMap};
 use p3trace::render::film::{to_byte, Film};
-use p3trace::render::{CostRays, RenderOptions, RenderReport, Sampling, Stage};
+use p3trace::render::{RenderOptions, RenderReport, Sampling, Stage};
 use p3trace::scene::{CameraSpec, Scene};
 use p3trace::view::{camera_block, Accumulator, Orbit};
 

@@ -26,6 +26,11 @@
 //! shares of a set's rays add up to its visits: [`SHARE`] divides by every lane count of a
 //! packet, and the sums stay whole. The lanes active at a visit, on average, are then the
 //! nodes counted over the visits.
+//!
+//! **By kind.** The renderer sums counts by what their rays are for ([`RayKind`]) in a
+//! [`Work`], and the rays it traces in the same shape ([`RayCounts`]).
+
+use std::ops::AddAssign;
 
 use crate::simd::{for_lanes, LaneBits, PACKET};
 
@@ -36,7 +41,7 @@ pub const SHARE: u64 = if PACKET > 8 { 720_720 } else { 840 };
 
 /// How a walk counts: [`NoCount`] (nothing, the walks as they run) or [`Tally`] (one ray's
 /// work). A packet's walk counts into [`Count::Lanes`], lane by lane.
-pub trait Count: Copy + Default + std::fmt::Debug + Send + Sync {
+pub trait Count: Copy + Default + std::fmt::Debug + Send + Sync + AddAssign {
     /// Whether anything is counted: callers skip the work of handing counts on without it.
     const ON: bool;
     /// A packet's counts, lane by lane.
@@ -54,7 +59,10 @@ pub trait Count: Copy + Default + std::fmt::Debug + Send + Sync {
     /// A grid cell visited.
     fn cell(&mut self);
     /// Adds `other`'s counts.
-    fn add(&mut self, other: &Self);
+    #[inline(always)]
+    fn add(&mut self, other: &Self) {
+        *self += *other;
+    }
 }
 
 /// A packet's counts, lane by lane: the same events as [`Count`], each for the lanes
@@ -91,8 +99,6 @@ impl Count for NoCount {
     fn prims(&mut self, _: u32) {}
     #[inline(always)]
     fn cell(&mut self) {}
-    #[inline(always)]
-    fn add(&mut self, _: &Self) {}
 }
 
 impl CountLanes<NoCount> for NoCount {
@@ -225,8 +231,11 @@ impl Count for Tally {
     fn cell(&mut self) {
         self.cells += 1;
     }
+}
+
+impl AddAssign for Tally {
     #[inline]
-    fn add(&mut self, other: &Self) {
+    fn add_assign(&mut self, other: Tally) {
         self.rays += other.rays;
         self.nodes += other.nodes;
         self.boxes += other.boxes;
@@ -236,6 +245,11 @@ impl Count for Tally {
         self.node_share += other.node_share;
         self.leaf_share += other.leaf_share;
     }
+}
+
+impl AddAssign for NoCount {
+    #[inline(always)]
+    fn add_assign(&mut self, _: NoCount) {}
 }
 
 /// A packet's [`Tally`] per lane.
@@ -281,6 +295,113 @@ impl CountLanes<Tally> for LaneTallies {
     fn lane(&self, k: usize) -> Tally {
         self.0[k]
     }
+}
+
+/// What a traced ray is for, as the statistics count it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayKind {
+    Primary,
+    Shadow,
+    Reflection,
+    Refraction,
+}
+
+/// A statistic of rays by kind ([`RayKind`]): with `C` a [`Count`], the traversal work of
+/// a pixel's rays, of a ray and the rays it spawned, or of a render's; with `u64`, the
+/// rays traced ([`RayCounts`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Work<C> {
+    pub primary: C,
+    pub shadow: C,
+    pub reflection: C,
+    pub refraction: C,
+}
+
+/// The rays a render traced, by kind.
+pub type RayCounts = Work<u64>;
+
+impl<C: Copy + AddAssign> Work<C> {
+    /// The statistic of the rays of the kind `kind`.
+    #[inline]
+    fn of_kind(&mut self, kind: RayKind) -> &mut C {
+        match kind {
+            RayKind::Primary => &mut self.primary,
+            RayKind::Shadow => &mut self.shadow,
+            RayKind::Reflection => &mut self.reflection,
+            RayKind::Refraction => &mut self.refraction,
+        }
+    }
+
+    /// Adds `count` to the kind `kind`'s statistic.
+    #[inline]
+    pub fn add(&mut self, kind: RayKind, count: impl Tallied<C>) {
+        *self.of_kind(kind) += count.value();
+    }
+
+    pub fn merge(&mut self, other: &Work<C>) {
+        self.primary += other.primary;
+        self.shadow += other.shadow;
+        self.reflection += other.reflection;
+        self.refraction += other.refraction;
+    }
+
+    /// The work of the rays of `rays`: all of them, or the primary ones.
+    pub fn of(&self, rays: CostRays) -> C {
+        match rays {
+            CostRays::All => self.total(),
+            CostRays::Primary => self.primary,
+        }
+    }
+
+    /// The work of each kind, then of all, with their names: `primary`, `shadow`,
+    /// `reflection`, `refraction` and `all`.
+    pub fn named(&self) -> [(&'static str, C); 5] {
+        [
+            ("primary", self.primary),
+            ("shadow", self.shadow),
+            ("reflection", self.reflection),
+            ("refraction", self.refraction),
+            ("all", self.total()),
+        ]
+    }
+
+    /// The work of every kind together.
+    pub fn total(&self) -> C {
+        let mut total = self.primary;
+        total += self.shadow;
+        total += self.reflection;
+        total += self.refraction;
+        total
+    }
+}
+
+/// What [`Work::add`] adds: a walk's [`Count`], by reference as the walks hand it on, or a
+/// number of rays for [`RayCounts`].
+pub trait Tallied<C> {
+    fn value(self) -> C;
+}
+
+impl<C: Count> Tallied<C> for &C {
+    #[inline]
+    fn value(self) -> C {
+        *self
+    }
+}
+
+impl Tallied<u64> for u64 {
+    #[inline]
+    fn value(self) -> u64 {
+        self
+    }
+}
+
+/// Which rays a cost image (`render --cost`) counts: all that a pixel's samples trace,
+/// or their primary rays alone.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CostRays {
+    #[default]
+    All,
+    Primary,
 }
 
 #[cfg(test)]

@@ -9,9 +9,8 @@
 use glam::Vec3;
 
 use super::film::{Film, ImageOutput, OutputFormat, Placement};
-use super::shade::CostRays;
 use super::{RenderMode, RenderWork};
-use crate::accel::count::Counter;
+use crate::accel::count::{CostRays, Counter};
 use crate::simd::PACKET;
 
 /// What a cost image shows: one counter, over the rays `rays` says.

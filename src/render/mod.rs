@@ -35,7 +35,7 @@ use bumpalo::Bump;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::accel::count::{Count, NoCount, Tally};
+use crate::accel::count::{Count, NoCount, RayCounts, RayKind, Tally, Work};
 use crate::accel::{AccelKind, AccelOptions, Tracer};
 use crate::intersect::IntersectOptions;
 use crate::limits::{check_image_size, MAX_SPP_SIDE};
@@ -46,9 +46,7 @@ use film::Film;
 use progress::{Meter, Progress};
 use region::Region;
 use sampler::{dim, Sample, SampleGrid, SampleRng};
-pub use shade::CostRays;
-pub use shade::Work;
-use shade::{RayCounts, RayKind, ShadeOptions, Shader};
+use shade::{ShadeOptions, Shader};
 use skybox::Skybox;
 
 /// Tiles are square blocks of this many pixels a side: the unit of work of a thread.
@@ -485,7 +483,7 @@ impl Frame<'_> {
                 rays
             })
             .reduce(RayCounts::default, |mut total, rays| {
-                total += rays;
+                total.merge(&rays);
                 total
             })
     }

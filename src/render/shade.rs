@@ -22,6 +22,8 @@ use super::light::{emitters, Emitter, Receiver, DEFAULT_LIGHT_GRID};
 use super::sampler::{dim, Sample, SampleGrid, SampleRng};
 use super::skybox::Skybox;
 use crate::accel::count::Count;
+// The stream renderer (`stream.rs`) takes these from here.
+pub(super) use crate::accel::count::{RayCounts, RayKind, Work};
 use crate::accel::{SphereAnswers, Tracer};
 use crate::intersect::{spawn_origin, Hits8, SphereRoots, SurfacePoint, SurfacePoint8};
 use crate::prim::PrimKind;
@@ -125,116 +127,6 @@ impl ShadeOptions {
             ..self
         }
     }
-}
-
-/// What a traced ray is for, as the statistics count it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RayKind {
-    Primary,
-    Shadow,
-    Reflection,
-    Refraction,
-}
-
-/// The rays a render traced, by kind.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RayCounts {
-    pub primary: u64,
-    pub shadow: u64,
-    pub reflection: u64,
-    pub refraction: u64,
-}
-
-impl RayCounts {
-    pub fn add(&mut self, kind: RayKind, rays: u64) {
-        *match kind {
-            RayKind::Primary => &mut self.primary,
-            RayKind::Shadow => &mut self.shadow,
-            RayKind::Reflection => &mut self.reflection,
-            RayKind::Refraction => &mut self.refraction,
-        } += rays;
-    }
-
-    pub fn total(&self) -> u64 {
-        self.primary + self.shadow + self.reflection + self.refraction
-    }
-}
-
-impl std::ops::AddAssign for RayCounts {
-    fn add_assign(&mut self, other: RayCounts) {
-        self.primary += other.primary;
-        self.shadow += other.shadow;
-        self.reflection += other.reflection;
-        self.refraction += other.refraction;
-    }
-}
-
-/// The traversal work of rays by kind (`accel::count`), where `C` counts: a pixel's, a
-/// ray's and the rays it spawned, or a render's.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Work<C> {
-    pub primary: C,
-    pub shadow: C,
-    pub reflection: C,
-    pub refraction: C,
-}
-
-impl<C: Count> Work<C> {
-    #[inline]
-    pub fn add(&mut self, kind: RayKind, count: &C) {
-        match kind {
-            RayKind::Primary => &mut self.primary,
-            RayKind::Shadow => &mut self.shadow,
-            RayKind::Reflection => &mut self.reflection,
-            RayKind::Refraction => &mut self.refraction,
-        }
-        .add(count);
-    }
-
-    pub fn merge(&mut self, other: &Work<C>) {
-        self.primary.add(&other.primary);
-        self.shadow.add(&other.shadow);
-        self.reflection.add(&other.reflection);
-        self.refraction.add(&other.refraction);
-    }
-
-    /// The work of the rays of `rays`: all of them, or the primary ones.
-    pub fn of(&self, rays: CostRays) -> C {
-        match rays {
-            CostRays::All => self.total(),
-            CostRays::Primary => self.primary,
-        }
-    }
-
-    /// The work of each kind, then of all, with their names: `primary`, `shadow`,
-    /// `reflection`, `refraction` and `all`.
-    pub fn named(&self) -> [(&'static str, C); 5] {
-        [
-            ("primary", self.primary),
-            ("shadow", self.shadow),
-            ("reflection", self.reflection),
-            ("refraction", self.refraction),
-            ("all", self.total()),
-        ]
-    }
-
-    /// The work of every kind together.
-    pub fn total(&self) -> C {
-        let mut total = self.primary;
-        total.add(&self.shadow);
-        total.add(&self.reflection);
-        total.add(&self.refraction);
-        total
-    }
-}
-
-/// Which rays a cost image (`render --cost`) counts: all that a pixel's samples trace,
-/// or their primary rays alone.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum CostRays {
-    #[default]
-    All,
-    Primary,
 }
 
 /// Everything a trace needs that stays fixed during a render.
