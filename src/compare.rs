@@ -4,10 +4,9 @@
 
 use std::path::Path;
 
-use glam::Vec3;
-
+use crate::imaging::false_colour::heat;
+use crate::imaging::Film;
 use crate::plural::noun;
-use crate::render::film::Film;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Comparison {
@@ -143,20 +142,6 @@ pub fn compare(a: &Levels, b: &Levels, tolerance: f32) -> Result<Comparison, Str
     })
 }
 
-/// The heat ramp's colours at 0, 1/4, 1/2, 3/4 and 1 of the full scale: black, blue, red,
-/// yellow, white, each brighter than the one before.
-const HEAT_RAMP: [Vec3; 5] = [
-    Vec3::ZERO,
-    Vec3::new(0.0, 0.0, 1.0),
-    Vec3::new(1.0, 0.0, 0.0),
-    Vec3::new(1.0, 1.0, 0.0),
-    Vec3::ONE,
-];
-
-/// The least share of the full scale that a differing pixel is drawn at: one level of
-/// blue, so that black means equal however small the difference.
-const LEAST_VISIBLE: f32 = 1.0 / (4.0 * 255.0);
-
 impl Comparison {
     /// A picture of where the images differ: each pixel's largest channel difference on
     /// the heat ramp, black where the images are equal and white at `full` levels (and
@@ -181,17 +166,6 @@ impl Comparison {
             Some(full) => format!("{ramp} {} or more", levels(full)),
         }
     }
-}
-
-/// The heat ramp's colour at `share` of the full scale, white from 1 on; black for 0 and
-/// for NaN (equal images' 0 / 0).
-fn heat(share: f32) -> Vec3 {
-    if !(share > 0.0) {
-        return HEAT_RAMP[0];
-    }
-    let position = share.clamp(LEAST_VISIBLE, 1.0) * 4.0;
-    let step = (position as usize).min(3);
-    HEAT_RAMP[step].lerp(HEAT_RAMP[step + 1], position - step as f32)
 }
 
 /// SSIM's stabilising constants (Wang et al. 2004): (K1 L)^2 and (K2 L)^2, with K1 = 0.01,
@@ -297,6 +271,8 @@ fn add_shifted(sums: &mut [f64], values: &[f64], tap: f64, shift: isize) {
 
 #[cfg(test)]
 mod tests {
+    use glam::Vec3;
+
     use super::*;
 
     fn image(rgb: Vec<f32>) -> Levels {
@@ -426,21 +402,6 @@ mod tests {
             c.heat_map_scale(Some(1.0)),
             "black 0 levels, then blue, red, yellow, white 1 level or more"
         );
-    }
-
-    #[test]
-    fn heat_ramp_rises_through_blue_red_and_yellow() {
-        assert_eq!(heat(0.0), Vec3::ZERO);
-        assert_eq!(heat(0.25), Vec3::new(0.0, 0.0, 1.0));
-        assert_eq!(heat(0.5), Vec3::new(1.0, 0.0, 0.0));
-        assert_eq!(heat(0.75), Vec3::new(1.0, 1.0, 0.0));
-        assert_eq!(heat(1.0), Vec3::ONE);
-        // Brighter at every step, by Rec. 709 luminance.
-        let luminance = |c: Vec3| c.dot(Vec3::new(0.2126, 0.7152, 0.0722));
-        let steps: Vec<f32> = (0..=100)
-            .map(|i| luminance(heat(i as f32 / 100.0)))
-            .collect();
-        assert!(steps.windows(2).all(|w| w[0] < w[1]), "{steps:?}");
     }
 
     #[test]

@@ -11,11 +11,12 @@ use std::io::Cursor;
 
 use glam::Vec3;
 
+use crate::imaging::openexr::{
+    read_exr_counts, read_exr_pixels, Placement, COUNT_CHANNEL, EXR_NOTE,
+};
+use crate::imaging::Film;
 use crate::limits::check_image_size;
 use crate::render::cost::CostMap;
-use crate::render::film::{
-    read_exr_counts, read_exr_pixels, Film, Placement, COUNT_CHANNEL, EXR_NOTE,
-};
 use crate::render::region::{Region, TileIndex};
 use crate::render::{RenderOptions, Sampling};
 use crate::scene::Scene;

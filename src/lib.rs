@@ -56,7 +56,7 @@
 //! assert_eq!((film.width, film.height), (32, 24));
 //! let one_thread = RenderOptions { threads: Some(1), ..options };
 //! let again = render(&scene, &one_thread).unwrap().film;
-//! let levels = |f: &p3trace::render::film::Film| Levels {
+//! let levels = |f: &p3trace::imaging::Film| Levels {
 //!     width: f.width,
 //!     height: f.height,
 //!     rgb: f.to_rgb8().into_iter().map(f32::from).collect(),
@@ -74,6 +74,7 @@ pub mod bench;
 pub mod compare;
 pub mod farm;
 pub mod generate;
+pub mod imaging;
 pub mod intersect;
 pub mod limits;
 pub mod machine;

@@ -22,11 +22,14 @@ use p3trace::accel::{AccelKind, AccelOptions, Tracer};
 use p3trace::compare::levels;
 use p3trace::farm::{self, Canvas};
 use p3trace::generate::{dragon, mountain, random, skybox, sphereflake};
+use p3trace::imaging::false_colour::Scale;
+use p3trace::imaging::format::{ImageOutput, OutputFormat};
+use p3trace::imaging::openexr::Placement;
+use p3trace::imaging::Film;
 use p3trace::intersect::IntersectOptions;
 use p3trace::plural::{count, noun};
 use p3trace::prim::PrimKind;
 use p3trace::render::cost::{self, CostMap};
-use p3trace::render::film::{Film, ImageOutput, OutputFormat, Placement};
 use p3trace::render::progress::Progress;
 use p3trace::render::region::Region;
 use p3trace::render::sampler::SampleGrid;
@@ -270,7 +273,7 @@ fn run_render(args: &RenderArgs) -> Result<ExitCode, Failure> {
     match (&cost, &report.work) {
         (Some(map), Some(work)) => {
             let film = map.film(work, region.width(), region.height());
-            let scale = cost::Scale {
+            let scale = Scale {
                 max: args.cost_max,
                 log: args.cost_scale,
             };
@@ -818,7 +821,7 @@ fn run_merge(args: &MergeArgs) -> Result<ExitCode, Failure> {
     let placement = canvas.placement();
     match cost {
         Some(map) => {
-            let scale = cost::Scale {
+            let scale = Scale {
                 max: args.cost_max,
                 log: args.cost_scale.unwrap_or(false),
             };

@@ -8,8 +8,8 @@ use std::time::Duration;
 
 use p3trace::accel::count::Counter;
 use p3trace::bench::{Line, Work};
+use p3trace::imaging::format::ImageOutput;
 use p3trace::machine;
-use p3trace::render::film::ImageOutput;
 use p3trace::render::{RenderOptions, RenderReport, RenderWork};
 use p3trace::scene::Scene;
 use serde_json::{json, Value};

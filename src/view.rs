@@ -11,7 +11,7 @@
 
 use glam::{DVec3, Vec3};
 
-use crate::render::film::Film;
+use crate::imaging::Film;
 use crate::scene::CameraSpec;
 
 /// How far a left drag turns the camera: degrees per pixel, as in the course program.

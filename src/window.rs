@@ -27,8 +27,9 @@ use crate::cli::ViewArgs;
 use crate::Failure;
 use p3trace::accel::count::{CostRays, Counter};
 use p3trace::accel::AccelKind;
-use p3trace::render::cost::{self, CostMap};
-use p3trace::render::film::{to_byte, Film};
+use p3trace::imaging::false_colour::{self, Scale};
+use p3trace::imaging::{to_byte, Film};
+use p3trace::render::cost::CostMap;
 use p3trace::render::{RenderOptions, RenderReport, Sampling, Stage};
 use p3trace::scene::{CameraSpec, Scene};
 use p3trace::view::{camera_block, Accumulator, Orbit};
@@ -654,11 +655,11 @@ impl<'a> Viewer<'a> {
         };
         let (w, h) = (report.film.width, report.film.height);
         let counts = map.film(work, w, h);
-        let scale = cost::Scale {
+        let scale = Scale {
             max: None,
             log: false,
         };
-        let picture = cost::picture(&counts, &map, scale);
+        let picture = false_colour::picture(&counts, map.counter.name(), scale);
         // The picture's colour bar stays out of the window: the counter is in the title.
         let mut film = Film::new(w, h);
         for row in 0..h {

@@ -4,7 +4,7 @@
 //!
 //! The faces come from the renderer's own definitions, so that they read back as the sky
 //! they were made from: each texel's direction is `render::skybox::Face::direction` (the
-//! lookup's mapping run backwards), and its bytes come from `render::film::to_byte`, the
+//! lookup's mapping run backwards), and its bytes come from `imaging::to_byte`, the
 //! conversion every rendered image goes through. `generate` sits above `render`, so this
 //! is no cycle.
 
@@ -13,7 +13,7 @@ use std::path::Path;
 use glam::Vec3;
 use image::RgbImage;
 
-use crate::render::film::to_byte;
+use crate::imaging::to_byte;
 use crate::render::skybox::Face;
 
 /// Which world axis points up: the course's scenes use Z (balls, mount) or Y.

@@ -1,5 +1,5 @@
 //! From a scene to an image: primary rays from the [`camera`], colours from the Whitted
-//! [`shade`]r, pixels gathered into a [`film`] by tiles spread over threads.
+//! [`shade`]r, pixels gathered into a [`Film`] by tiles spread over threads.
 //!
 //! [`render`] builds the structure and loads the skybox side by side, then renders the
 //! tiles of the region on rayon's threads: one ray at a time, or (the default) as a
@@ -13,8 +13,6 @@
 
 pub mod camera;
 pub mod cost;
-pub mod film;
-pub mod jpeg_scan;
 pub mod light;
 pub mod progress;
 pub mod region;
@@ -37,12 +35,12 @@ use rayon::prelude::*;
 
 use crate::accel::count::{Count, NoCount, RayCounts, RayKind, Tally, Work};
 use crate::accel::{AccelKind, AccelOptions, Tracer};
+use crate::imaging::Film;
 use crate::intersect::IntersectOptions;
 use crate::limits::{check_image_size, MAX_SPP_SIDE};
 use crate::scene::{CameraSpec, Scene};
 use crate::simd::PACKET;
 use camera::{Camera, FilmSample};
-use film::Film;
 use progress::{Meter, Progress};
 use region::Region;
 use sampler::{dim, Sample, SampleGrid, SampleRng};

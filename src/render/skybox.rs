@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::jpeg_scan;
+use crate::imaging::jpeg_scan;
 
 /// Face files in the order of [`Face`].
 pub const FACE_NAMES: [&str; 6] = ["right", "left", "top", "bottom", "front", "back"];

@@ -9,7 +9,7 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use crate::common::{p3trace, scratch, stderr, stdout};
-use p3trace::render::film::to_byte;
+use p3trace::imaging::to_byte;
 
 /// A camera on line 1, looking down -Z at the origin from 5 units away.
 const CAMERA: &str = "v from 0 0 5 at 0 0 0 up 0 1 0 angle 45 resolution 16 12\n";

@@ -7,8 +7,8 @@ use std::process::{Command, Output};
 
 use p3trace::accel::stream::Query;
 use p3trace::accel::AccelKind;
+use p3trace::imaging::Film;
 use p3trace::ray::Ray;
-use p3trace::render::film::Film;
 use p3trace::render::{render, RenderOptions};
 use p3trace::scene::Scene;
 

@@ -6,7 +6,7 @@ use crate::common;
 use crate::common::render_scene;
 use glam::{Vec2, Vec3};
 use p3trace::accel::AccelKind;
-use p3trace::render::film::Film;
+use p3trace::imaging::Film;
 use p3trace::render::sampler::SampleGrid;
 use p3trace::render::{RenderMode, RenderOptions, Sampling};
 use p3trace::scene::p3f::parse_text;

@@ -14,7 +14,7 @@ use p3trace::generate::mountain::{mount_scene, mountain};
 use p3trace::generate::random::random_scene;
 use p3trace::generate::skybox::{face_image, sky_colour, Up};
 use p3trace::generate::sphereflake::{balls_scene, sphere_count, sphereflake};
-use p3trace::render::film::to_byte;
+use p3trace::imaging::to_byte;
 use p3trace::render::skybox::{Face, Skybox};
 use p3trace::render::{render, RenderOptions};
 use p3trace::scene::p3f::parse_text;

@@ -9,7 +9,7 @@ use crate::common::render_scene;
 use glam::Vec3;
 use p3trace::accel::{AccelKind, BvhWidth};
 use p3trace::compare;
-use p3trace::render::film::{to_byte, Film};
+use p3trace::imaging::{to_byte, Film};
 use p3trace::render::sampler::SampleGrid;
 use p3trace::render::shade::{Profile, EPS};
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};

@@ -9,7 +9,7 @@ use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use p3trace::render::film::Film;
+use p3trace::imaging::Film;
 use p3trace::render::sampler::SampleGrid;
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling, Stage};
 use p3trace::scene::{parse_file, parse_file_in, Frame};
