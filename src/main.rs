@@ -292,21 +292,7 @@ fn cost_map(args: &RenderArgs, options: &RenderOptions) -> Result<Option<CostMap
     let Some(counter) = args.cost else {
         return Ok(None);
     };
-    let counts = match options.accel.kind {
-        AccelKind::None => &[Counter::Prims][..],
-        AccelKind::Grid => &[
-            Counter::Boxes,
-            Counter::Leaves,
-            Counter::Prims,
-            Counter::Cells,
-        ],
-        AccelKind::Bvh => &[
-            Counter::Nodes,
-            Counter::Boxes,
-            Counter::Leaves,
-            Counter::Prims,
-        ],
-    };
+    let counts = options.accel.kind.counters();
     if !counts.contains(&counter) {
         let names: Vec<&str> = counts.iter().map(|c| c.name()).collect();
         let structure = match options.accel.kind {

@@ -25,7 +25,7 @@ use notify::{RecommendedWatcher, RecursiveMode, Watcher};
 
 use crate::cli::ViewArgs;
 use crate::Failure;
-use p3trace::accel::count::{CostRays, Counter};
+use p3trace::accel::count::CostRays;
 use p3trace::accel::AccelKind;
 use p3trace::imaging::false_colour::{self, Scale};
 use p3trace::imaging::{to_byte, Film};
@@ -287,15 +287,6 @@ const STRUCTURES: [(Key, AccelKind, &str); 3] = [
 
 fn structure_name(kind: AccelKind) -> &'static str {
     STRUCTURES.iter().find(|s| s.1 == kind).map_or("?", |s| s.2)
-}
-
-/// The counter a structure's cost image shows.
-fn cost_counter(kind: AccelKind) -> Counter {
-    match kind {
-        AccelKind::Bvh => Counter::Nodes,
-        AccelKind::Grid => Counter::Cells,
-        AccelKind::None => Counter::Prims,
-    }
 }
 
 /// The window's state.
@@ -650,7 +641,7 @@ impl<'a> Viewer<'a> {
             return report.film.clone();
         };
         let map = CostMap {
-            counter: cost_counter(accel),
+            counter: accel.step(),
             rays: CostRays::All,
         };
         let (w, h) = (report.film.width, report.film.height);
@@ -803,7 +794,7 @@ impl<'a> Viewer<'a> {
             self.rate.1
         );
         if self.cost {
-            title += &format!("cost: {} ", cost_counter(self.accel).name());
+            title += &format!("cost: {} ", self.accel.step().name());
         } else {
             title += &format!(
                 "{}/{} spp ",

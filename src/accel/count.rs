@@ -32,6 +32,7 @@
 
 use std::ops::AddAssign;
 
+use crate::scene::AccelKind;
 use crate::simd::{for_lanes, LaneBits, PACKET};
 
 /// The share of a visit made by one ray alone, in [`Tally::node_share`] and
@@ -186,6 +187,37 @@ impl Counter {
 
     pub fn from_name(name: &str) -> Option<Counter> {
         Counter::ALL.into_iter().find(|c| c.name() == name)
+    }
+}
+
+impl AccelKind {
+    /// The counters its walks count, in [`Counter::ALL`]'s order: every other stays 0.
+    pub fn counters(self) -> &'static [Counter] {
+        match self {
+            AccelKind::None => &[Counter::Prims],
+            AccelKind::Grid => &[
+                Counter::Boxes,
+                Counter::Leaves,
+                Counter::Prims,
+                Counter::Cells,
+            ],
+            AccelKind::Bvh => &[
+                Counter::Nodes,
+                Counter::Boxes,
+                Counter::Leaves,
+                Counter::Prims,
+            ],
+        }
+    }
+
+    /// The counter of the step its walks are made of: a BVH's nodes, the grid's cells,
+    /// brute force's primitives.
+    pub fn step(self) -> Counter {
+        match self {
+            AccelKind::Bvh => Counter::Nodes,
+            AccelKind::Grid => Counter::Cells,
+            AccelKind::None => Counter::Prims,
+        }
     }
 }
 
@@ -419,6 +451,17 @@ mod tests {
             assert_eq!((nodes, leaves), (SHARE, SHARE), "lanes {lanes:b}");
             let visited: u32 = packet.0.iter().map(|t| t.nodes).sum();
             assert_eq!(visited, lanes.count_ones());
+        }
+    }
+
+    #[test]
+    fn a_structures_step_is_among_its_counters() {
+        for kind in [AccelKind::None, AccelKind::Grid, AccelKind::Bvh] {
+            assert!(kind.counters().contains(&kind.step()), "{kind:?}");
+            let in_order: Vec<Counter> = (Counter::ALL.into_iter())
+                .filter(|c| kind.counters().contains(c))
+                .collect();
+            assert_eq!(kind.counters(), in_order, "{kind:?}");
         }
     }
 
