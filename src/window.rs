@@ -60,7 +60,7 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode, Failure> {
         ));
     }
     let scene = read(args)?;
-    let base = crate::settings_options(&args.settings, &scene)?;
+    let base = crate::commands::settings_options(&args.settings, &scene)?;
     base.check_size().map_err(Failure::Usage)?;
     let (width, height) = (base.width as usize, base.height as usize);
     let mut window = Window::new(&title_name(&scene), width, height, WindowOptions::default())
@@ -89,7 +89,7 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode, Failure> {
 
 /// The scene as `render` reads it with the same flags.
 fn read(args: &ViewArgs) -> Result<Scene, Failure> {
-    crate::settings_scene(&args.scene, &args.settings)
+    crate::commands::settings_scene(&args.scene, &args.settings)
 }
 
 fn title_name(scene: &Scene) -> String {
@@ -228,7 +228,7 @@ fn serve(jobs: &Slot, done: &Sender<Done>) {
 /// Watches the scene file's folder and the skybox's, sending the paths that change; none
 /// for the built-in `random` scene, or where the system refuses a watch (said once).
 fn watch(args: &ViewArgs, scene: &Scene, changes: Sender<PathBuf>) -> Option<RecommendedWatcher> {
-    if args.scene == Path::new(crate::RANDOM_SCENE) {
+    if args.scene == Path::new(crate::commands::RANDOM_SCENE) {
         return None;
     }
     let handler = move |event: notify::Result<notify::Event>| {
@@ -760,7 +760,7 @@ impl<'a> Viewer<'a> {
         }
         self.reload_at = None;
         let reread = read(self.args).and_then(|scene| {
-            let base = crate::settings_options(&self.args.settings, &scene)?;
+            let base = crate::commands::settings_options(&self.args.settings, &scene)?;
             Ok((scene, base))
         });
         match reread {
