@@ -12,7 +12,6 @@ use crate::accel::count::{Count, CountLanes, Counter, NoCount, Tally, SHARE};
 use crate::accel::stream::{self, Occlusions, Query};
 use crate::accel::Tracer;
 use crate::plural::count;
-use crate::prim::PrimKind;
 use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::render::light::{emitters, Receiver};
 use crate::render::sampler::{Sample, SampleGrid, SampleRng};
@@ -199,26 +198,8 @@ pub fn ray_sets(scene: &Scene, tracer: &Tracer) -> [RaySet; 3] {
         let d = ray.dir.as_dvec3();
         let p = ray.origin.as_dvec3() + d * hit.t as f64;
         // Geometric normals (not the interpolated ones of smooth triangles), in double
-        // precision where the harness works in double: a small sphere turns an error
-        // in the hit point into a large one in its normal.
-        let i = hit.prim.index();
-        let normal = match hit.prim.kind() {
-            PrimKind::Sphere => {
-                let s = &g.spheres.records[i];
-                (p - s.centre.as_dvec3()) / s.radius as f64
-            }
-            PrimKind::MovingSphere => {
-                let s = &g.moving_spheres;
-                (p - s.centre_at(i, 0.0).as_dvec3()) / s.radius[i] as f64
-            }
-            PrimKind::Triangle => {
-                let [e1, e2] = g.triangles.records[i].edges();
-                e1.cross(e2).as_dvec3().normalize()
-            }
-            _ => g
-                .normal(hit.prim, p.as_vec3(), hit.u, hit.v, 0.0)
-                .as_dvec3(),
-        };
+        // precision where the harness works in double.
+        let normal = g.geometric_normal64(hit.prim, p, hit.u, hit.v);
         let facing = if normal.dot(d) < 0.0 { normal } else { -normal };
         let origin = p + facing * OFFSET;
         let receiver = Receiver {

@@ -27,18 +27,19 @@ use crate::intersect::{gamma, trusted_box, Aabb};
 use crate::prim::{PrimId, PrimKind};
 use crate::scene::Geometry;
 
-/// The trusted box of a bounded primitive, over the whole `shutter` for moving spheres, a
-/// sphere's (moving or not) grown first by `sphere_margin` ([`textbook_margin`]).
-/// Non-finite primitives get the empty box (they are never hit).
+/// The trusted box of a bounded primitive, over the whole `shutter` for moving ones,
+/// grown first by `sphere_margin` ([`textbook_margin`]) where its kind takes the margin of
+/// the sphere roots ([`Geometry::takes_roots_margin`]). Non-finite primitives get the
+/// empty box (they are never hit).
 pub fn prim_bounds(
     geometry: &Geometry,
     prim: PrimId,
     shutter: [f32; 2],
     sphere_margin: f32,
 ) -> Aabb {
-    let margin = match prim.kind() {
-        PrimKind::Sphere | PrimKind::MovingSphere => sphere_margin,
-        _ => 0.0,
+    let margin = match Geometry::takes_roots_margin(prim.kind()) {
+        true => sphere_margin,
+        false => 0.0,
     };
     trusted_box(geometry.bounds(prim, shutter), margin).unwrap_or(Aabb::EMPTY)
 }

@@ -34,7 +34,7 @@ use std::time::{Duration, Instant};
 
 use crate::intersect::{
     beyond_lanes, holds_lanes8, intervals_lanes8, BoxPack8, IntersectOptions, PacketQuery,
-    RayQuery, SphereRoots,
+    RayQuery, Rays8, SphereRoots,
 };
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{traceable_lanes, Hit, Ray, RayPacket};
@@ -107,7 +107,7 @@ pub struct AccelOptions {
     pub grid_density: f32,
     /// Test an object that spans several grid cells only once per ray.
     pub mailbox: bool,
-    /// The shutter interval: moving spheres are bounded over all of it (`render` sets
+    /// The shutter interval: moving primitives are bounded over all of it (`render` sets
     /// it from `RenderOptions::shutter`).
     pub shutter: [f32; 2],
     /// What the profile chooses in the primitives' tests, which every query carries
@@ -251,32 +251,33 @@ impl Structure for Accel {
     }
 }
 
-/// What [`Tracer::closest_in_sphere8`] answers of eight rays.
+/// What [`Tracer::closest_inside8`] answers of eight rays.
 #[derive(Clone, Copy, Debug)]
-pub struct SphereAnswers {
+pub struct InsideAnswers {
     /// The lanes answered.
     pub answered: u8,
-    /// In those lanes, the closest hit's `t` and sphere, and how many spheres were tested.
+    /// In those lanes, the closest hit's `t` and primitive, and how many primitives were
+    /// tested.
     pub t: F32x8,
-    pub sphere: [u32; 8],
+    pub prim: [PrimId; 8],
     pub tested: [u32; 8],
 }
 
-impl SphereAnswers {
+impl InsideAnswers {
     /// No lane answered.
-    pub const NONE: SphereAnswers = SphereAnswers {
+    pub const NONE: InsideAnswers = InsideAnswers {
         answered: 0,
         t: F32x8::ZERO,
-        sphere: [0; 8],
+        prim: [PrimId::new(PrimKind::ALL[0], 0); 8],
         tested: [0; 8],
     };
 
-    /// Lane `k`'s hit (an answered lane).
+    /// Lane `k`'s hit (an answered lane): the kinds with an interior have no barycentrics.
     #[inline]
     pub fn hit(&self, k: usize) -> Hit {
         Hit {
             t: self.t.lane(k),
-            prim: PrimId::new(PrimKind::Sphere, self.sphere[k]),
+            prim: self.prim[k],
             u: 0.0,
             v: 0.0,
         }
@@ -305,10 +306,10 @@ impl SphereAnswers {
 pub struct Tracer<'s> {
     pub geometry: &'s Geometry,
     accel: Accel,
-    /// The spheres' rooms: the rays from inside a sphere that it and the spheres near it
+    /// The rooms: the rays from inside a primitive that it and the primitives near it
     /// answer ([`interior`]); none unless asked for ([`Tracer::with_rooms`]).
     rooms: Option<interior::Rooms>,
-    /// The shutter interval the structure bounds moving spheres over.
+    /// The shutter interval the structure bounds moving primitives over.
     shutter: [f32; 2],
     /// What the profile chose in the primitives' tests: every query carries it.
     options: IntersectOptions,
@@ -345,8 +346,9 @@ impl<'s> Tracer<'s> {
         }
     }
 
-    /// The tracer, with the rooms of the spheres whose material `glass` says rays travel
-    /// in: [`Tracer::closest_in_sphere8`] answers the rays made inside them ([`interior`]).
+    /// The tracer, with the rooms of the primitives (of kinds with an interior) whose
+    /// material `glass` says rays travel in: [`Tracer::closest_inside8`] answers the rays
+    /// made inside them ([`interior`]).
     /// Making the rooms counts in the build time.
     pub fn with_rooms(mut self, glass: impl Fn(u32) -> bool) -> Self {
         let start = Instant::now();
@@ -406,48 +408,46 @@ impl<'s> Tracer<'s> {
 
     /// Whether `prim` alone blocks `ray` within `(t_min, t_max)`, by its own test: where it
     /// does, [`Tracer::occluded`] and [`Tracer::occluded_packet`] answer yes too, as every
-    /// structure finds what testing each primitive finds. [`Tracer::occluded_by_spheres8`]
+    /// structure finds what testing each primitive finds. [`Tracer::occluded_by_own8`]
     /// is its eight-lane twin.
     pub fn occluded_by(&self, prim: PrimId, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         let query = RayQuery::new(ray, t_min, self.options);
         ray.is_traceable() && self.geometry.intersect(prim, &query, t_max).is_some()
     }
 
-    /// [`Tracer::occluded_by`] for eight rays, lane `k` the ray from `origin[k]` along
-    /// `dir[k]` within `(t_min, t_max[k])` against sphere `indices[k]`. A shadow ray that
-    /// leaves a sphere from inside meets it again before any light outside it: the
-    /// renderer answers those so, without a walk.
+    /// [`Tracer::occluded_by`] for eight rays, lane `k` ray `k` of `rays` within `(t_min,
+    /// t_max[k])` against the primitive of kind `kind` and index `indices[k]`. A shadow
+    /// ray that leaves a closed primitive from inside meets it again before any light
+    /// outside it: the renderer answers those so, without a walk.
     #[inline]
-    pub fn occluded_by_spheres8(
+    pub fn occluded_by_own8(
         &self,
-        indices: [usize; 8],
-        (origin, dir): (Vec3x8, Vec3x8),
+        (kind, indices): (PrimKind, [usize; 8]),
+        rays: &Rays8,
         t_min: f32,
         t_max: F32x8,
     ) -> Mask8 {
-        let spheres = &self.geometry.spheres;
-        let (hit, _) = spheres.hit_lanes8(indices, (origin, dir), t_min, t_max, self.options);
-        traceable_lanes(origin, dir) & hit
+        let interval = (t_min, t_max);
+        let (hit, _) = self
+            .geometry
+            .hits8(kind, indices, rays, interval, self.options);
+        traceable_lanes(rays.origin, rays.dir) & hit
     }
 
-    /// The closest hits of eight rays from inside the trusted box of sphere `sphere`, found
-    /// by that sphere and the spheres near it where they answer as every structure would
+    /// The closest hits of eight rays `rays` from inside the trusted box of `prim`, found
+    /// by it and the primitives near it where they answer as every structure would
     /// ([`interior`]): of the lanes `lanes`, those answered, and each one's hit. The other
     /// lanes need a walk.
-    pub fn closest_in_sphere8(
-        &self,
-        sphere: usize,
-        (origin, dir): (Vec3x8, Vec3x8),
-        lanes: u8,
-    ) -> SphereAnswers {
+    pub fn closest_inside8(&self, prim: PrimId, rays: &Rays8, lanes: u8) -> InsideAnswers {
         let Some(rooms) = &self.rooms else {
-            return SphereAnswers::NONE;
+            return InsideAnswers::NONE;
         };
-        let Some((near_spheres, near_boxes)) = rooms.near_spheres(sphere) else {
-            return SphereAnswers::NONE;
+        let Some((near_prims, near_boxes)) = rooms.near(prim) else {
+            return InsideAnswers::NONE;
         };
-        let room = rooms.bounds(self.geometry, sphere);
+        let room = rooms.bounds(self.geometry, prim);
         let (min, max) = (Vec3x8::splat(room.min), Vec3x8::splat(room.max));
+        let Rays8 { origin, dir, .. } = *rays;
         let inside = origin.x.ge(min.x)
             & origin.y.ge(min.y)
             & origin.z.ge(min.z)
@@ -456,21 +456,21 @@ impl<'s> Tracer<'s> {
             & origin.z.le(max.z);
         let asked = (inside & traceable_lanes(origin, dir)).bitmask() & lanes;
         if asked == 0 {
-            return SphereAnswers::NONE;
+            return InsideAnswers::NONE;
         }
         let infinity = F32x8::splat(f32::INFINITY);
         let inv_dir = dir.recip();
-        let test = |i: u32| {
-            let rays = ((origin, dir), inv_dir);
-            let spheres = &self.geometry.spheres;
-            spheres.hit_one8(i as usize, rays, 0.0, infinity, self.options)
+        let test = |p: PrimId| {
+            let within = (0.0, infinity);
+            self.geometry
+                .hits_one8(p, (rays, inv_dir), within, self.options)
         };
-        let (mut found, mut best) = test(sphere as u32);
-        let mut best_sphere = [sphere as u32; 8];
+        let (mut found, mut best) = test(prim);
+        let mut best_prim = [prim; 8];
         let mut tested = [1; 8];
-        for (&near, near_box) in near_spheres.iter().zip(near_boxes) {
-            // The lanes where the near sphere's box may hold a hit at or before the best
-            // (any hit, where none was found): no routine reports one in the others.
+        for (&near, near_box) in near_prims.iter().zip(near_boxes) {
+            // The lanes where the near primitive's box may hold a hit at or before the
+            // best (any hit, where none was found): no routine reports one in the others.
             let near_box = BoxPack8 {
                 min: Vec3x8::splat(near_box.min),
                 max: Vec3x8::splat(near_box.max),
@@ -487,18 +487,18 @@ impl<'s> Tracer<'s> {
             // The tie rule of `ClosestHit`: the smaller `t`, at equal `t` the smaller id.
             let mut wins = (hit & (!found | t.lt(best))).bitmask();
             for_lanes((hit & found & t.eq(best)).bitmask(), |k| {
-                wins |= u8::from(near < best_sphere[k]) << k;
+                wins |= u8::from(near < best_prim[k]) << k;
             });
             best = Mask8::from_bitmask(wins).select(t, best);
-            for_lanes(wins, |k| best_sphere[k] = near);
+            for_lanes(wins, |k| best_prim[k] = near);
             found = found | hit;
         }
-        // A near sphere's hit beyond the sphere's box may have a closer one outside it.
+        // A near primitive's hit beyond the room may have a closer one outside it.
         let held = holds_lanes8(origin, inv_dir, &BoxPack8 { min, max }, 0.0, best);
-        SphereAnswers {
+        InsideAnswers {
             answered: (found & held).bitmask() & asked,
             t: best,
-            sphere: best_sphere,
+            prim: best_prim,
             tested,
         }
     }

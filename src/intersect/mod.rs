@@ -79,10 +79,12 @@ pub type PacketHits = TriangleHits<F32xP>;
 
 use std::cell::OnceCell;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use crate::ray::{Ray, RayPacket};
-use crate::simd::{Bits, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3x8};
+use crate::simd::{
+    bits_where, Bits, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3x8,
+};
 
 /// The storage of one primitive kind, and what the layers above ask of a primitive `i`
 /// of it. Implemented in the kind's own file; [`crate::scene::Geometry`] dispatches to it.
@@ -144,6 +146,93 @@ pub trait Shapes {
         SurfacePoint8::from_lanes(std::array::from_fn(|k| {
             self.surface_point(indices[k], &rays[k], hits.t[k], hits.u[k], hits.v[k])
         }))
+    }
+
+    /// Whether the structures grow this kind's boxes by the margin of the profile's sphere
+    /// roots ([`IntersectOptions::sphere_margin`], `accel::bounds`).
+    const ROOTS_MARGIN: bool = false;
+
+    /// Whether the primitives move over the shutter (their boxes cover the whole of it).
+    const MOVING: bool = false;
+
+    /// Whether the rays inside this kind's primitives (refracted into them, reflected
+    /// within them, their shadow rays) are answered by the primitives' own tests and those
+    /// of the few near them, without a walk (`accel::interior`). For a closed kind whose
+    /// hits have no barycentrics, with eight-lane twins of the three tests below: the
+    /// defaults, one lane at a time, would cost more than the walks they save.
+    const INTERIOR: bool = false;
+
+    /// Eight rays against eight primitives, lane `k` against primitive `indices[k]` within
+    /// `(t_min, t_max[k])`: the lanes that hit, and each hit's `t` (unspecified in the
+    /// others), bit for bit as [`Shapes::intersect`]. By default one lane at a time.
+    fn hits8(
+        &self,
+        indices: [usize; 8],
+        rays: &Rays8,
+        t_min: f32,
+        t_max: F32x8,
+        options: IntersectOptions,
+    ) -> (Mask8, F32x8) {
+        let mut t = [0.0; 8];
+        let hit = bits_where(|k| {
+            let query = RayQuery::new(&rays.lane(k), t_min, options);
+            let found = self.intersect(indices[k], &query, t_max.lane(k));
+            found.inspect(|h| t[k] = h.t).is_some()
+        });
+        (Mask8::from_bitmask(hit), F32x8::from_array(t))
+    }
+
+    /// [`Shapes::hits8`] with primitive `index` in every lane, for rays whose `1 / dir`
+    /// the caller has (`inv_dir`).
+    fn hits_one8(
+        &self,
+        index: usize,
+        (rays, _inv_dir): (&Rays8, Vec3x8),
+        t_min: f32,
+        t_max: F32x8,
+        options: IntersectOptions,
+    ) -> (Mask8, F32x8) {
+        self.hits8([index; 8], rays, t_min, t_max, options)
+    }
+
+    /// [`Shapes::surface_points8`] of eight hits without barycentrics given as lanes
+    /// (lane `k`: primitive `indices[k]` at `t[k]` along ray `k` of `rays`), without the
+    /// rays' transposition where the kind has the twin. By default the rays transposed.
+    fn surface_points_along8(&self, indices: [usize; 8], rays: &Rays8, t: F32x8) -> SurfacePoint8 {
+        let hits = Hits8 {
+            t: t.to_array(),
+            u: [0.0; 8],
+            v: [0.0; 8],
+        };
+        self.surface_points8(indices, &std::array::from_fn(|k| rays.lane(k)), &hits)
+    }
+
+    /// The geometric normal (a smooth triangle's too) at the hit point `p` at time 0, in
+    /// double precision where the kind computes it so: `bench` works in double, and a
+    /// small sphere turns an error in its point into a large one in its normal. By
+    /// default [`Shapes::normal`], widened.
+    fn geometric_normal64(&self, i: usize, p: DVec3, u: f32, v: f32) -> DVec3 {
+        self.normal(i, p.as_vec3(), u, v, 0.0).as_dvec3()
+    }
+}
+
+/// Eight rays as lanes: origins, unit directions and shutter times.
+#[derive(Clone, Copy, Debug)]
+pub struct Rays8 {
+    pub origin: Vec3x8,
+    pub dir: Vec3x8,
+    pub time: F32x8,
+}
+
+impl Rays8 {
+    /// The ray of lane `k`.
+    #[inline]
+    pub fn lane(&self, k: usize) -> Ray {
+        Ray {
+            origin: self.origin.lane(k),
+            dir: self.dir.lane(k),
+            time: self.time.lane(k),
+        }
     }
 }
 

@@ -1,7 +1,7 @@
 //! Spheres in linear motion (P3F.md 6.5): the sphere's routines at the centre of the
 //! ray's time. No packet kernel: they are rare, and tested lane by lane.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use super::sphere::{sphere, sphere_bounds, sphere_surface_point, trusted_sphere_box};
 use super::{Aabb, RayQuery, Shapes, SurfacePoint, TriangleHit, Vec3s};
@@ -73,5 +73,13 @@ impl Shapes for MovingSpheres {
     /// The sphere's, about the centre the test used at the ray's `time`.
     fn surface_point(&self, i: usize, ray: &Ray, t: f32, _u: f32, _v: f32) -> SurfacePoint {
         sphere_surface_point(self.centre_at(i, ray.time), self.radius[i], ray, t)
+    }
+
+    const ROOTS_MARGIN: bool = true;
+
+    const MOVING: bool = true;
+
+    fn geometric_normal64(&self, i: usize, p: DVec3, _u: f32, _v: f32) -> DVec3 {
+        (p - self.centre_at(i, 0.0).as_dvec3()) / f64::from(self.radius[i])
     }
 }

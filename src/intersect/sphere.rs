@@ -2,12 +2,12 @@
 //! packet's rays against one sphere; one ray against a [`SpherePack8`] of a BVH leaf),
 //! each in two forms of the quadratic ([`SphereRoots`]).
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use super::{first_root_in, first_root_in_lanes, holds_lanes8};
 use super::{
     gamma, trusted_box, Aabb, BoxPack8, Hits8, IntersectOptions, LeafPack, PacketHits, PacketQuery,
-    RayQuery, Shapes, SurfacePoint, SurfacePoint8, TriangleHit, TriangleHit8,
+    RayQuery, Rays8, Shapes, SurfacePoint, SurfacePoint8, TriangleHit, TriangleHit8,
 };
 
 use crate::ray::{Ray, RayPacket};
@@ -218,58 +218,15 @@ impl Spheres {
             material,
         });
     }
-
-    /// Eight rays against eight spheres, lane by lane: whether sphere `indices[k]` holds a
-    /// hit of the ray from `origin[k]` along `dir[k]` within `(t_min, t_max[k])`, and its
-    /// `t` in the lanes that hit, bit for bit as [`Shapes::intersect`] answers it (its
-    /// roots, then its trusted box).
-    #[inline]
-    pub fn hit_lanes8(
-        &self,
-        indices: [usize; 8],
-        rays: (Vec3x8, Vec3x8),
-        t_min: f32,
-        t_max: F32x8,
-        options: IntersectOptions,
-    ) -> (Mask8, F32x8) {
-        let records = indices.map(|i| &self.records[i]);
-        let centre = Vec3x8::from_lanes(records.map(|r| r.centre));
-        let radius = F32x8::from_array(records.map(|r| r.radius));
-        let inv_dir = || rays.1.recip();
-        spheres_lanes8((centre, radius), rays, inv_dir, (t_min, t_max), options)
-    }
-
-    /// The box the structures hold sphere `index` in (`accel::bounds::prim_bounds`), if
-    /// it is finite: its hits count only inside it.
-    #[inline]
-    pub fn trusted_box(&self, index: usize, options: IntersectOptions) -> Option<Aabb> {
-        let Sphere { centre, radius, .. } = self.records[index];
-        trusted_sphere_box(centre, radius, options)
-    }
-
-    /// [`Spheres::hit_lanes8`] with sphere `index` in every lane, for rays whose
-    /// `inv_dir = 1 / dir` the caller has (the trusted box's test takes it).
-    #[inline(always)]
-    pub fn hit_one8(
-        &self,
-        index: usize,
-        (rays, inv_dir): ((Vec3x8, Vec3x8), Vec3x8),
-        t_min: f32,
-        t_max: F32x8,
-        options: IntersectOptions,
-    ) -> (Mask8, F32x8) {
-        let Sphere { centre, radius, .. } = self.records[index];
-        let sphere = (Vec3x8::splat(centre), F32x8::splat(radius));
-        spheres_lanes8(sphere, rays, || inv_dir, (t_min, t_max), options)
-    }
 }
 
-/// The body of [`Spheres::hit_lanes8`]: sphere `k` (its centre and radius) against ray `k`,
-/// `inv_dir` giving the rays' `1 / dir` where a hit needs its trusted box's test.
+/// The body of the spheres' [`Shapes::hits8`]: sphere `k` (its centre and radius)
+/// against ray `k`, `inv_dir` giving the rays' `1 / dir` where a hit needs its trusted
+/// box's test.
 #[inline(always)]
 fn spheres_lanes8(
     (centre, radius): (Vec3x8, F32x8),
-    (origin, dir): (Vec3x8, Vec3x8),
+    &Rays8 { origin, dir, .. }: &Rays8,
     inv_dir: impl FnOnce() -> Vec3x8,
     (t_min, t_max): (f32, F32x8),
     options: IntersectOptions,
@@ -468,25 +425,57 @@ impl Shapes for Spheres {
     }
 
     /// The scalar surface point (`sphere_surface_point`) eight at a time;
-    /// [`Spheres::surface_points_along8`] of the rays' lanes.
+    /// [`Shapes::surface_points_along8`] of the rays' lanes.
     fn surface_points8(&self, indices: [usize; 8], rays: &[Ray; 8], hits: &Hits8) -> SurfacePoint8 {
-        let origin = Vec3x8::from_lanes(rays.map(|r| r.origin));
-        let dir = Vec3x8::from_lanes(rays.map(|r| r.dir));
-        self.surface_points_along8(indices, (origin, dir), F32x8::from_array(hits.t))
+        let lanes = Rays8 {
+            origin: Vec3x8::from_lanes(rays.map(|r| r.origin)),
+            dir: Vec3x8::from_lanes(rays.map(|r| r.dir)),
+            time: F32x8::ZERO,
+        };
+        self.surface_points_along8(indices, &lanes, F32x8::from_array(hits.t))
     }
-}
 
-impl Spheres {
-    /// The surface points of eight hits given as lanes (lane `k`: sphere `indices[k]` at
-    /// `t[k]` along the ray from `origin` towards `dir`), each bit for bit the scalar
-    /// `sphere_surface_point`; a lane whose offset from the centre has no direction (rare)
-    /// is left to the scalar form.
-    pub fn surface_points_along8(
+    const ROOTS_MARGIN: bool = true;
+
+    /// Glass spheres hold most of the rays of the scenes that have them, and no other
+    /// primitive comes near most of them.
+    const INTERIOR: bool = true;
+
+    /// The spheres' roots, then their trusted boxes, eight at a time.
+    #[inline]
+    fn hits8(
         &self,
         indices: [usize; 8],
-        (origin, dir): (Vec3x8, Vec3x8),
-        t: F32x8,
-    ) -> SurfacePoint8 {
+        rays: &Rays8,
+        t_min: f32,
+        t_max: F32x8,
+        options: IntersectOptions,
+    ) -> (Mask8, F32x8) {
+        let records = indices.map(|i| &self.records[i]);
+        let centre = Vec3x8::from_lanes(records.map(|r| r.centre));
+        let radius = F32x8::from_array(records.map(|r| r.radius));
+        let inv_dir = || rays.dir.recip();
+        spheres_lanes8((centre, radius), rays, inv_dir, (t_min, t_max), options)
+    }
+
+    #[inline(always)]
+    fn hits_one8(
+        &self,
+        index: usize,
+        (rays, inv_dir): (&Rays8, Vec3x8),
+        t_min: f32,
+        t_max: F32x8,
+        options: IntersectOptions,
+    ) -> (Mask8, F32x8) {
+        let Sphere { centre, radius, .. } = self.records[index];
+        let sphere = (Vec3x8::splat(centre), F32x8::splat(radius));
+        spheres_lanes8(sphere, rays, || inv_dir, (t_min, t_max), options)
+    }
+
+    /// Each lane bit for bit the scalar `sphere_surface_point`; a lane whose offset from
+    /// the centre has no direction (rare) is left to the scalar form.
+    fn surface_points_along8(&self, indices: [usize; 8], rays: &Rays8, t: F32x8) -> SurfacePoint8 {
+        let Rays8 { origin, dir, .. } = *rays;
         let records = indices.map(|i| &self.records[i]);
         let centre = Vec3x8::from_lanes(records.map(|r| r.centre));
         let radius = F32x8::from_array(records.map(|r| r.radius));
@@ -509,6 +498,11 @@ impl Spheres {
             points.set_lane(k, sphere_surface_point(centre, radius, &ray, t.lane(k)));
         });
         points
+    }
+
+    fn geometric_normal64(&self, i: usize, p: DVec3, _u: f32, _v: f32) -> DVec3 {
+        let Sphere { centre, radius, .. } = self.records[i];
+        (p - centre.as_dvec3()) / f64::from(radius)
     }
 }
 

@@ -47,7 +47,7 @@
 
 use std::ops::{Mul, Sub};
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use super::{
     gamma, trusted_box, Aabb, BoxPack8, BoxRays, Hits8, IntersectOptions, LeafPack, PacketHits,
@@ -910,6 +910,11 @@ impl Shapes for Triangles {
     /// triangles the vertex normals interpolated at `(u, v)`.
     fn normal(&self, i: usize, _p: Vec3, u: f32, v: f32, _time: f32) -> Vec3 {
         self.shading_normal(self.records[i].shading, u, v, || self.geometric_normal(i))
+    }
+
+    fn geometric_normal64(&self, i: usize, _p: DVec3, _u: f32, _v: f32) -> DVec3 {
+        let [e1, e2] = self.records[i].edges();
+        e1.cross(e2).as_dvec3().normalize()
     }
 
     /// `p0 + u e1 + v e2` (`e1 = p1 - p0`, `e2 = p2 - p0`), a point of the triangle's plane

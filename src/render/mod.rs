@@ -145,7 +145,7 @@ pub struct RenderOptions {
 /// The error of a render that its `stop` flag ended.
 pub const STOPPED: &str = "the render was stopped";
 
-/// The shutter of the course's code, used when a scene has moving spheres.
+/// The shutter of the course's code, used when a scene has moving primitives.
 pub const DEFAULT_SHUTTER: [f32; 2] = [0.0, 0.3];
 
 impl RenderOptions {
@@ -165,7 +165,7 @@ impl RenderOptions {
                 ..AccelOptions::default()
             },
             mode: RenderMode::Stream,
-            shutter: if !scene.geometry.moving_spheres.radius.is_empty() {
+            shutter: if scene.geometry.has_moving() {
                 DEFAULT_SHUTTER
             } else {
                 [0.0; 2]
@@ -303,8 +303,8 @@ impl<'s> Stage<'s> {
     /// Builds the structure and loads the skybox side by side, on rayon's threads.
     pub fn new(scene: &'s Scene, options: &RenderOptions) -> Self {
         let mut warnings = Vec::new();
-        // Moving spheres are bounded over the whole shutter, and spheres are tested as the
-        // profile says (the course's renderer solved the textbook quadratic).
+        // Moving primitives are bounded over the whole shutter, and tested as the profile
+        // says (the course's renderer solved the textbook quadratic).
         let accel_options = AccelOptions {
             shutter: options.shutter,
             intersect: IntersectOptions {
@@ -323,7 +323,7 @@ impl<'s> Stage<'s> {
             || {
                 let tracer = Tracer::new(&scene.geometry, &accel_options);
                 match options.mode {
-                    // Only the stream renderer asks the spheres (`accel::interior`).
+                    // Only the stream renderer asks the rooms (`accel::interior`).
                     RenderMode::Stream => {
                         tracer.with_rooms(|m| scene.materials[m as usize].transmittance > 0.0)
                     }

@@ -24,8 +24,8 @@ use super::skybox::Skybox;
 use crate::accel::count::Count;
 // The stream renderer (`stream.rs`) takes these from here.
 pub(super) use crate::accel::count::{RayCounts, RayKind, Work};
-use crate::accel::{SphereAnswers, Tracer};
-use crate::intersect::{spawn_origin, Hits8, SphereRoots, SurfacePoint, SurfacePoint8};
+use crate::accel::{InsideAnswers, Tracer};
+use crate::intersect::{spawn_origin, Hits8, Rays8, SphereRoots, SurfacePoint, SurfacePoint8};
 use crate::prim::PrimKind;
 use crate::ray::{Hit, Ray};
 use crate::scene::{Frame, Material, Scene};
@@ -358,26 +358,22 @@ impl<'a> Shader<'a> {
         }
     }
 
-    /// [`Shader::hit_points8`] for the hits `answers` on spheres of the rays from
-    /// `origin` towards `dir` at shutter times `time`, given as lanes: without the rays'
-    /// transposition where the profile has a twin.
-    pub(super) fn sphere_points8(
+    /// [`Shader::hit_points8`] for the hits `answers` of the rays `rays` from inside
+    /// primitives, on primitives of kind `kind` if they share one, given as lanes: without
+    /// the rays' transposition where the profile and the kind have the twin.
+    pub(super) fn inside_points8(
         &self,
-        answers: &SphereAnswers,
-        (origin, dir, time): (Vec3x8, Vec3x8, F32x8),
+        answers: &InsideAnswers,
+        rays: &Rays8,
+        kind: Option<PrimKind>,
     ) -> SurfacePoint8 {
-        if self.options.profile == Profile::Standard {
-            let spheres = &self.tracer.geometry.spheres;
-            let indices = answers.sphere.map(|s| s as usize);
-            return spheres.surface_points_along8(indices, (origin, dir), answers.t);
+        if let (Profile::Standard, Some(kind)) = (self.options.profile, kind) {
+            let indices = answers.prim.map(|p| p.index());
+            let geometry = &self.tracer.geometry;
+            return geometry.surface_points_along8(kind, indices, rays, answers.t);
         }
-        let rays = std::array::from_fn(|k| Ray {
-            origin: origin.lane(k),
-            dir: dir.lane(k),
-            time: time.lane(k),
-        });
         let hits = std::array::from_fn(|k| answers.hit(k));
-        self.hit_points8(&rays, &hits, Some(PrimKind::Sphere))
+        self.hit_points8(&std::array::from_fn(|k| rays.lane(k)), &hits, kind)
     }
 
     /// Whether every reflected direction is the mirror direction ([`Shader::fuzz`]).

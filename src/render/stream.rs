@@ -5,14 +5,14 @@
 //! and the rays they spawn make the next depth's queue. A depth's hits are gathered eight
 //! to a [`HitBlock`] (structure of arrays), whose points are recomputed on the surfaces
 //! ([`Shader::hit_points8`]) and offset off them ([`spawn_origin8`]), whose shadow rays
-//! are set up ([`crate::render::light::Emitter::sample8`]; one that leaves a sphere from
-//! inside is answered by that sphere's test alone, as the walk would answer it:
-//! [`crate::accel::Tracer::occluded_by_spheres8`]), whose Blinn-Phong sums are
+//! are set up ([`crate::render::light::Emitter::sample8`]; one that leaves a primitive
+//! from inside is answered by that primitive's test alone, as the walk would answer it:
+//! [`crate::accel::Tracer::occluded_by_own8`]), whose Blinn-Phong sums are
 //! taken ([`super::shade::Phong8`]) and whose reflected and transmitted rays are made
 //! ([`Bounce8`]) eight lanes at a time, light by light in the scalar order, bit for bit
 //! as the scalar path. A depth queues its reflected rays, then its transmitted ones; those
-//! made inside a sphere (refracted into it, reflected within it) that the sphere and the
-//! spheres near it answer as they are made ([`crate::accel::Tracer::closest_in_sphere8`])
+//! made inside a primitive (refracted into it, reflected within it) that it and the
+//! primitives near it answer as they are made ([`crate::accel::Tracer::closest_inside8`])
 //! go between the two, with their hits, and are not walked: they stay the lanes of the
 //! block that made them, which become a hit block at the next depth without a gathering.
 //! Each of the three is a part of the queue of its own, filled where its rays are made.
@@ -32,16 +32,17 @@ use super::sampler::Sample;
 use super::shade::{Bounce8, Optics8, Phong8, Profile, RayCounts, RayKind, Shader, Work, EPS};
 use crate::accel::count::{Count, CountLanes};
 use crate::accel::stream::{self, Answers};
-use crate::accel::SphereAnswers;
-use crate::intersect::{spawn_origin8, SurfacePoint8};
+use crate::accel::InsideAnswers;
+use crate::intersect::{spawn_origin8, Rays8, SurfacePoint8};
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{Hit, Ray};
+use crate::scene::Geometry;
 use crate::simd::{bits_where, for_lanes, F32x8, Mask8, Vec3x8};
 
 /// The rays of one depth, and what they bring back, in three parts, each filled where its
 /// rays are made (no part is copied after another): the reflected rays that are walked
 /// ([`WALKED_REFLECTED`], at depth 1 the primary rays), then the reflected and the
-/// transmitted rays that start inside spheres, which gave their hits as the rays were
+/// transmitted rays that start inside primitives, which gave their hits as the rays were
 /// made ([`ANSWERED`], kept eight lanes to an [`AnsweredRays`] as their hit block made
 /// them), then the transmitted rays that are walked. The queue's order is the parts' in
 /// turn; a ray's [`slot`] names its part and its place there (in the answered part, its
@@ -99,19 +100,17 @@ fn at_mut<'v, T>(parts: &'v mut Parts<T>, slot: u32) -> &'v mut T {
     &mut parts[part][place]
 }
 
-/// The rays that one hit block made inside one sphere, in the block's lanes, with the hits
-/// that sphere and its near ones gave them ([`crate::accel::Tracer::closest_in_sphere8`]):
-/// they stay lanes from the block that made them to the block of their hits, never single
-/// rays queued and gathered again.
+/// The rays that one hit block made inside one primitive, in the block's lanes, with the
+/// hits that primitive and its near ones gave them
+/// ([`crate::accel::Tracer::closest_inside8`]): they stay lanes from the block that made
+/// them to the block of their hits, never single rays queued and gathered again.
 #[derive(Clone, Copy)]
 struct AnsweredRays {
-    /// The lanes held (`answers.answered`), each one's closest hit and spheres tested.
-    answers: SphereAnswers,
+    /// The lanes held (`answers.answered`), each one's closest hit and primitives tested.
+    answers: InsideAnswers,
     /// The lanes that hold reflected rays; the others held are transmitted.
     reflected: u8,
-    origin: Vec3x8,
-    dir: Vec3x8,
-    time: F32x8,
+    rays: Rays8,
 }
 
 impl AnsweredRays {
@@ -369,7 +368,7 @@ fn shade_depth<'a, C: Count>(
     rays.shadow += shadows.traced;
     for (b, block) in blocks.iter().enumerate() {
         // The lanes some light reaches; the others keep the black their hits were taken
-        // with (inside a glass sphere, most blocks).
+        // with (inside glass, most blocks).
         let lit_by_any = (0..shadows.lights).fold(0, |lanes, light| {
             lanes | shadows.lit[light * blocks.len() + b]
         });
@@ -397,10 +396,10 @@ fn shade_depth<'a, C: Count>(
     // A hit spawns a reflected and a transmitted ray at most, computed eight hits at a
     // time ([`Bounce8`]). The reflected rays come first and the transmitted ones after
     // them, as Embree's stream renderer orders them: a packet then holds rays that leave
-    // a surface on one side (a glass sphere's reflections outside it, its refractions
+    // a surface on one side (a glass ball's reflections outside it, its refractions
     // inside), and each parent still receives its reflected colour before its
     // transmitted one, the scalar order of its sum.
-    // The rays that start inside spheres and that the spheres answer, reflected and
+    // The rays that start inside primitives and that the primitives answer, reflected and
     // transmitted, are queued between the other reflected rays and transmitted ones: a
     // parent has one of them at most (its reflected ray if it arrived from inside, else
     // its transmitted one), so each parent's reflected ray still comes before its
@@ -431,7 +430,8 @@ fn shade_depth<'a, C: Count>(
                 block.origin
             };
             let answered = block.inner_answers(shader, &bounce, inward, (reflected, through));
-            // A lane's ray inside its sphere is its reflected one if it arrived from inside.
+            // A lane's ray inside its primitive is its reflected one if it arrived from
+            // inside.
             let (inner_reflected, inner_through) = match &answered {
                 Some(rays) => (rays.reflected, rays.answers.answered & !rays.reflected),
                 None => (0, 0),
@@ -514,11 +514,12 @@ struct HitBlock {
     lanes: u8,
     /// The lanes whose ray arrived from inside the surface.
     inside: u8,
-    /// Whether every lane hit a sphere (the shadow rays of those that arrived from inside
-    /// meet it again: [`crate::accel::Tracer::occluded_by_spheres8`]; the rays they
-    /// spawn inside it may meet it alone: [`HitBlock::inner_answers`]), and each lane's
-    /// primitive.
-    spheres: bool,
+    /// The kind of every lane's primitive, where they share one with an interior
+    /// ([`Geometry::has_interior`]: the shadow rays of the lanes that arrived from inside
+    /// meet their primitive again, [`crate::accel::Tracer::occluded_by_own8`]; the rays
+    /// they spawn inside it may meet it alone, [`HitBlock::inner_answers`]), and each
+    /// lane's primitive.
+    interior: Option<PrimKind>,
     prim: [PrimId; 8],
     /// Whether the points have error bounds (all but with the `course` profile).
     bounded: bool,
@@ -559,14 +560,17 @@ impl HitBlock {
     }
 
     /// The block of the hits of `rays`, record `record` of the answered part: the points
-    /// recomputed on the spheres from the lanes as they are ([`Shader::sphere_points8`]),
+    /// recomputed on the surfaces from the lanes as they are ([`Shader::inside_points8`]),
     /// the lanes not held repeating the first held, as a gathered block's do.
     fn answered(shader: &Shader, rays: &AnsweredRays, record: usize) -> Self {
         let AnsweredRays {
             mut answers,
-            mut origin,
-            mut dir,
-            mut time,
+            rays:
+                Rays8 {
+                    mut origin,
+                    mut dir,
+                    mut time,
+                },
             ..
         } = *rays;
         let lanes = answers.answered;
@@ -579,12 +583,12 @@ impl HitBlock {
             time = held.select(time, F32x8::splat(time.lane(first)));
             answers.t = held.select(answers.t, F32x8::splat(answers.t.lane(first)));
             for_lanes(!lanes, |k| {
-                (answers.sphere[k], ray[k]) = (answers.sphere[first], ray[first]);
+                (answers.prim[k], ray[k]) = (answers.prim[first], ray[first]);
             });
         }
-        let surface = shader.sphere_points8(&answers, (origin, dir, time));
-        let prims = answers.sphere.map(|s| PrimId::new(PrimKind::Sphere, s));
-        let kind = Some(PrimKind::Sphere);
+        let prims = answers.prim;
+        let kind = PrimId::shared_kind(&prims);
+        let surface = shader.inside_points8(&answers, &Rays8 { origin, dir, time }, kind);
         Self::on_surface(shader, &surface, (dir, time), (prims, kind), (ray, lanes))
     }
 
@@ -606,7 +610,7 @@ impl HitBlock {
         let mut block = HitBlock {
             lanes,
             inside: inside.bitmask(),
-            spheres: kind == Some(PrimKind::Sphere),
+            interior: kind.filter(|&kind| Geometry::has_interior(kind)),
             prim: prims,
             bounded: shader.options.profile == Profile::Standard,
             ray,
@@ -622,8 +626,8 @@ impl HitBlock {
         block
     }
 
-    /// The rays this block spawns inside its spheres with their closest hits, where the
-    /// spheres answer them ([`crate::accel::Tracer::closest_in_sphere8`]): of the lanes
+    /// The rays this block spawns inside its primitives with their closest hits, where the
+    /// primitives answer them ([`crate::accel::Tracer::closest_inside8`]): of the lanes
     /// that reflect (`reflected`) those that arrived from inside, and of those that
     /// transmit (`through`, starting at `inward`) those that arrived from outside. Fuzzy
     /// reflections are left to the walks.
@@ -640,24 +644,23 @@ impl HitBlock {
             0
         };
         let lanes = mirrors | (through & !self.inside);
-        if !self.spheres || lanes == 0 {
+        if self.interior.is_none() || lanes == 0 {
             return None;
         }
-        // The lanes in the sphere of the first: eight lanes of one sphere are the rule.
-        let sphere = self.prim[lanes.trailing_zeros() as usize];
-        let lanes = lanes & bits_where::<u8>(|k| self.prim[k] == sphere);
+        // The lanes in the primitive of the first: eight lanes of one are the rule.
+        let prim = self.prim[lanes.trailing_zeros() as usize];
+        let lanes = lanes & bits_where::<u8>(|k| self.prim[k] == prim);
         let inside = Mask8::from_bitmask(self.inside);
-        let origin = inside.select_vec(self.origin, inward);
-        let dir = inside.select_vec(bounce.mirror, bounce.refracted);
-        let answers = shader
-            .tracer
-            .closest_in_sphere8(sphere.index(), (origin, dir), lanes);
+        let rays = Rays8 {
+            origin: inside.select_vec(self.origin, inward),
+            dir: inside.select_vec(bounce.mirror, bounce.refracted),
+            time: self.time,
+        };
+        let answers = shader.tracer.closest_inside8(prim, &rays, lanes);
         (answers.answered != 0).then_some(AnsweredRays {
             answers,
             reflected: answers.answered & self.inside,
-            origin,
-            dir,
-            time: self.time,
+            rays,
         })
     }
 
@@ -692,7 +695,7 @@ impl<'a> HitBlocks<'a> {
         // What the lanes hold before their first hit: each is written before it is read.
         let none = Hit {
             t: 0.0,
-            prim: PrimId::new(PrimKind::Sphere, 0),
+            prim: PrimId::new(PrimKind::ALL[0], 0),
             u: 0.0,
             v: 0.0,
         };
@@ -830,18 +833,22 @@ impl<'a> ShadowQueue<'a> {
                     dir: incident.dir.lane(k),
                     time: block.time.lane(k),
                 };
-                // A ray that leaves a sphere from inside is answered by that sphere's
-                // test, as the walk would answer it, without the walk.
+                // A ray that leaves a primitive from inside is answered by that
+                // primitive's test, as the walk would answer it, without the walk.
                 let mut walked = facing;
-                let enclosed = if block.spheres {
-                    facing & block.inside
-                } else {
-                    0
+                let enclosed = match block.interior {
+                    Some(_) => facing & block.inside,
+                    None => 0,
                 };
-                if enclosed != 0 {
-                    let own = shader.tracer.occluded_by_spheres8(
-                        block.prim.map(|p| p.index()),
-                        (block.origin, incident.dir),
+                if let (Some(kind), true) = (block.interior, enclosed != 0) {
+                    let rays = Rays8 {
+                        origin: block.origin,
+                        dir: incident.dir,
+                        time: block.time,
+                    };
+                    let own = shader.tracer.occluded_by_own8(
+                        (kind, block.prim.map(|p| p.index())),
+                        &rays,
                         0.0,
                         incident.distance,
                     );

@@ -3,15 +3,15 @@
 //! dispatch from a [`PrimId`] to its kind's [`Shapes`], both generated from that list.
 //! Planes are unbounded and kept apart from the rest: accelerators never hold them.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use crate::intersect::{
-    Aabb, Hits8, PacketHits, PacketQuery, RayQuery, Shapes, SurfacePoint, SurfacePoint8,
-    TriangleHit,
+    Aabb, Hits8, IntersectOptions, PacketHits, PacketQuery, RayQuery, Rays8, Shapes, SurfacePoint,
+    SurfacePoint8, TriangleHit,
 };
 use crate::prim::{prim_kinds, PrimId, PrimKind};
 use crate::ray::Ray;
-use crate::simd::{F32xP, LaneBits};
+use crate::simd::{F32x8, F32xP, LaneBits, Mask8, Vec3x8};
 
 macro_rules! define_geometry {
     ($($kind:ident, $field:ident, $storage:ident, $name:literal, $bound:ident, $pack:ident;)*) => {
@@ -122,6 +122,84 @@ macro_rules! define_geometry {
             ) -> SurfacePoint8 {
                 match kind {
                     $(PrimKind::$kind => self.$field.surface_points8(indices, rays, hits),)*
+                }
+            }
+
+            /// Whether some primitive moves over the shutter ([`Shapes::MOVING`]).
+            pub fn has_moving(&self) -> bool {
+                $((<crate::intersect::$storage as Shapes>::MOVING && !self.$field.is_empty()) ||)*
+                false
+            }
+
+            /// Whether the structures grow the boxes of `kind` by the margin of the
+            /// profile's sphere roots ([`Shapes::ROOTS_MARGIN`]).
+            pub fn takes_roots_margin(kind: PrimKind) -> bool {
+                match kind {
+                    $(PrimKind::$kind => <crate::intersect::$storage as Shapes>::ROOTS_MARGIN,)*
+                }
+            }
+
+            /// Whether the rays inside the primitives of `kind` are answered by their own
+            /// tests, without a walk ([`Shapes::INTERIOR`]).
+            #[inline]
+            pub fn has_interior(kind: PrimKind) -> bool {
+                match kind {
+                    $(PrimKind::$kind => <crate::intersect::$storage as Shapes>::INTERIOR,)*
+                }
+            }
+
+            /// Eight rays against eight primitives of `kind`, lane `k` against the one of
+            /// index `indices[k]` ([`Shapes::hits8`]).
+            #[inline]
+            pub fn hits8(
+                &self,
+                kind: PrimKind,
+                indices: [usize; 8],
+                rays: &Rays8,
+                (t_min, t_max): (f32, F32x8),
+                options: IntersectOptions,
+            ) -> (Mask8, F32x8) {
+                match kind {
+                    $(PrimKind::$kind => self.$field.hits8(indices, rays, t_min, t_max, options),)*
+                }
+            }
+
+            /// Eight rays, whose `1 / dir` is `inv_dir`, against `prim`
+            /// ([`Shapes::hits_one8`]).
+            #[inline(always)]
+            pub fn hits_one8(
+                &self,
+                prim: PrimId,
+                rays: (&Rays8, Vec3x8),
+                (t_min, t_max): (f32, F32x8),
+                options: IntersectOptions,
+            ) -> (Mask8, F32x8) {
+                let i = prim.index();
+                match prim.kind() {
+                    $(PrimKind::$kind => self.$field.hits_one8(i, rays, t_min, t_max, options),)*
+                }
+            }
+
+            /// The surface points of eight hits on primitives of `kind` given as lanes
+            /// ([`Shapes::surface_points_along8`]).
+            #[inline]
+            pub fn surface_points_along8(
+                &self,
+                kind: PrimKind,
+                indices: [usize; 8],
+                rays: &Rays8,
+                t: F32x8,
+            ) -> SurfacePoint8 {
+                match kind {
+                    $(PrimKind::$kind => self.$field.surface_points_along8(indices, rays, t),)*
+                }
+            }
+
+            /// The geometric normal of `prim` at `p`, in double precision where its kind
+            /// computes it so ([`Shapes::geometric_normal64`]).
+            pub fn geometric_normal64(&self, prim: PrimId, p: DVec3, u: f32, v: f32) -> DVec3 {
+                match prim.kind() {
+                    $(PrimKind::$kind => self.$field.geometric_normal64(prim.index(), p, u, v),)*
                 }
             }
         }

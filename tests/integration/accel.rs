@@ -10,7 +10,7 @@ use p3trace::accel::count::{LaneTallies, NoCount, Tally};
 use p3trace::accel::stream::{self, Occlusions};
 use p3trace::accel::{AccelKind, AccelOptions, Tracer};
 use p3trace::accel::{BvhBuild, BvhWidth};
-use p3trace::intersect::{self, IntersectOptions, SphereRoots};
+use p3trace::intersect::{self, IntersectOptions, Rays8, SphereRoots};
 use p3trace::prim::{PrimId, PrimKind};
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::{render, RenderOptions};
@@ -282,6 +282,15 @@ fn far_ray() -> impl Strategy<Value = (Ray, f32)> {
         })
 }
 
+/// Eight rays as lanes.
+fn lanes_of(rays: &[Ray; 8]) -> Rays8 {
+    Rays8 {
+        origin: Vec3x8::from_fn(|k| rays[k].origin),
+        dir: Vec3x8::from_fn(|k| rays[k].dir),
+        time: F32x8::from_array(rays.map(|r| r.time)),
+    }
+}
+
 /// A ray from a corner of a sphere's box that misses the sphere and meets the sphere
 /// beside it behind a triangle, out of the box: the two spheres must not answer it, as
 /// the near sphere's hit lies beyond the box (a primitive out there may come first).
@@ -297,16 +306,12 @@ fn a_near_spheres_hit_beyond_the_box_is_left_to_the_walk() {
         .closest(&ray, 0.0, f32::INFINITY)
         .expect("the triangle");
     assert_eq!(hit.prim.kind(), PrimKind::Triangle);
-    let answers =
-        brute.closest_in_sphere8(0, (Vec3x8::splat(ray.origin), Vec3x8::splat(ray.dir)), 1);
+    let sphere = PrimId::new(PrimKind::Sphere, 0);
+    let answers = brute.closest_inside8(sphere, &lanes_of(&[ray; 8]), 1);
     assert_eq!(answers.answered, 0);
     // From the centre, the sphere answers: its own far side.
     let centre = Ray::new(Vec3::ZERO, ray.dir);
-    let answers = brute.closest_in_sphere8(
-        0,
-        (Vec3x8::splat(centre.origin), Vec3x8::splat(centre.dir)),
-        1,
-    );
+    let answers = brute.closest_inside8(sphere, &lanes_of(&[centre; 8]), 1);
     assert_eq!(answers.answered, 1);
     assert_eq!(
         Some(answers.hit(0)),
@@ -352,7 +357,7 @@ proptest! {
     }
 
     /// The renderer answers a shadow ray that leaves a sphere from inside by that sphere's
-    /// test alone (`Tracer::occluded_by_spheres8`, eight lanes, against its scalar twin
+    /// test alone (`Tracer::occluded_by_own8`, eight lanes, against its scalar twin
     /// `occluded_by`): wherever that says blocked, every structure's walk says so too.
     #[test]
     fn a_sphere_blocks_its_own_rays_as_every_walk_does(
@@ -376,12 +381,9 @@ proptest! {
             .chain(structures())
             .map(|options| Tracer::new(g, &options))
             .collect();
-        let lanes = (
-            Vec3x8::from_fn(|k| rays[k].origin),
-            Vec3x8::from_fn(|k| rays[k].dir),
-        );
         let t_max = F32x8::from_array(std::array::from_fn(|k| t_max[k]));
-        let blocked = tracers[0].occluded_by_spheres8(indices, lanes, 0.0, t_max).bitmask();
+        let own = (PrimKind::Sphere, indices);
+        let blocked = tracers[0].occluded_by_own8(own, &lanes_of(&rays), 0.0, t_max).bitmask();
         for k in 0..8 {
             let prim = PrimId::new(PrimKind::Sphere, indices[k] as u32);
             let alone = tracers[0].occluded_by(prim, &rays[k], 0.0, t_max.lane(k));
@@ -396,7 +398,7 @@ proptest! {
     }
 
     /// The renderer answers a ray that starts inside a sphere's box by that sphere and
-    /// the spheres near it (`Tracer::closest_in_sphere8`): each lane it answers has brute
+    /// the spheres near it (`Tracer::closest_inside8`): each lane it answers has brute
     /// force's closest hit, on rows of spheres that touch, overlap or keep about the
     /// rooms' margin apart, among other primitives.
     #[test]
@@ -422,8 +424,8 @@ proptest! {
             ..AccelOptions::brute_force()
         };
         let brute = Tracer::new(g, &options).with_rooms(|_| true);
-        let lanes = (Vec3x8::from_fn(|k| rays[k].origin), Vec3x8::from_fn(|k| rays[k].dir));
-        let answers = brute.closest_in_sphere8(sphere, lanes, 0xff);
+        let prim = PrimId::new(PrimKind::Sphere, sphere as u32);
+        let answers = brute.closest_inside8(prim, &lanes_of(&rays), 0xff);
         for (k, ray) in rays.iter().enumerate().filter(|(k, _)| answers.answered >> k & 1 == 1) {
             let expected = brute.closest(ray, 0.0, f32::INFINITY);
             prop_assert_eq!(Some(answers.hit(k)), expected, "lane {}: {:?}", k, ray);

@@ -10,7 +10,7 @@ use std::cell::OnceCell;
 use glam::{Vec2, Vec3};
 use p3trace::intersect::{
     self, Aabb, BoxPack8, BoxRay, BoxRays, Boxes, Hits8, IntersectOptions, Intervals, LeafPack,
-    PacketQuery, RayQuery, Shapes, Shear, ShearLanes, SpherePack8, SphereRoots, Spheres,
+    PacketQuery, RayQuery, Rays8, Shapes, Shear, ShearLanes, SpherePack8, SphereRoots, Spheres,
     SurfacePoint, SurfacePoint8, TriangleHit, TriangleHits, TrianglePack8, Triangles,
 };
 use p3trace::ray::{Ray, RayPacket};
@@ -643,11 +643,11 @@ proptest! {
         }
     }
 
-    /// `Spheres::hit_lanes8` (eight rays against eight spheres, lane by lane) and
-    /// `Spheres::hit_one8` (against one) against `Shapes::intersect`: both root forms,
+    /// The spheres' `Shapes::hits8` (eight rays against eight spheres, lane by lane) and
+    /// `Shapes::hits_one8` (against one) against `Shapes::intersect`: both root forms,
     /// with and without the margin.
     #[test]
-    fn sphere_hit_lanes8_equal_scalar(
+    fn sphere_hits8_equal_scalar(
         rays in prop::array::uniform8(ray()),
         spheres in prop::collection::vec((point(), radius()), 1..=8),
         order in prop::array::uniform8(0usize..8),
@@ -662,12 +662,16 @@ proptest! {
         }
         let options = IntersectOptions { sphere_roots: roots, sphere_margin };
         let indices = order.map(|i| i % spheres.len());
-        let lanes = (Vec3x8::from_fn(|k| rays[k].origin), Vec3x8::from_fn(|k| rays[k].dir));
+        let lanes = Rays8 {
+            origin: Vec3x8::from_fn(|k| rays[k].origin),
+            dir: Vec3x8::from_fn(|k| rays[k].dir),
+            time: F32x8::from_fn(|k| rays[k].time),
+        };
         let (hit, t) =
-            storage.hit_lanes8(indices, lanes, t_min, F32x8::from_fn(|k| t_max[k]), options);
+            storage.hits8(indices, &lanes, t_min, F32x8::from_fn(|k| t_max[k]), options);
         // And sphere `indices[0]` against every lane.
         let (one_hit, one_t) =
-            storage.hit_one8(indices[0], (lanes, lanes.1.recip()), t_min, F32x8::from_fn(|k| t_max[k]), options);
+            storage.hits_one8(indices[0], (&lanes, lanes.dir.recip()), t_min, F32x8::from_fn(|k| t_max[k]), options);
         for k in 0..8 {
             let query = RayQuery::new(&rays[k], t_min, options);
             let scalar = storage.intersect(indices[k], &query, t_max[k]).map(|h| h.t.to_bits());
