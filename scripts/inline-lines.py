@@ -2,11 +2,12 @@
 """Where a function's inlined code spends its instructions, by source line.
 
 Reads a callgrind profile made with `--dump-instr=yes` and puts each instruction's own
-cost at the outermost frame of SOURCE in the instruction's inline chain (addr2line -i):
-the line of SOURCE whose statement the instruction serves, however deeply the compiler
-inlined what that statement calls. Where that line calls a function named by `--expand`
-(one inlined whole, such as `stream::trace`'s call of `shade_depth`), the next frame of
-SOURCE inside it is taken instead. Instructions without a frame of SOURCE are grouped by
+cost at the outermost frame of SOURCE (a file, or every file of a folder) in the
+instruction's inline chain (addr2line -i): the line of SOURCE whose statement the
+instruction serves, however deeply the compiler inlined what that statement calls. Where
+that line calls a function named by `--expand` (one inlined whole, such as
+`shade_depth`'s call of a stage), the next frame of SOURCE inside it is taken instead,
+and so on down. Instructions without a frame of SOURCE are grouped by
 the function they lie in (or, inside another crate's function, by the outermost line of
 the project's own sources inlined there), so that the groups add up to the whole run.
 
@@ -14,8 +15,8 @@ BENCHMARKS.md's shading budget comes from it:
 
     valgrind --tool=callgrind --dump-instr=yes --callgrind-out-file=cg.out \\
       target/portable/release/p3trace render SCENE --threads 1 --accel bvh --no-skybox -q -o x.png
-    scripts/inline-lines.py cg.out target/portable/release/p3trace src/render/stream.rs \\
-      --expand shade_depth
+    scripts/inline-lines.py cg.out target/portable/release/p3trace src/render/stream/ \\
+      --expand shade_depth --expand trace_hits --expand shade_lit --expand spawn
 
 Needs binutils' addr2line and a binary with line tables (the release profile has them), and
 valgrind the portable build (CONTRIBUTING.md) where the CPU has AVX-512.
@@ -23,6 +24,7 @@ valgrind the portable build (CONTRIBUTING.md) where the CPU has AVX-512.
 
 import argparse
 import collections
+import os
 import re
 import subprocess
 import sys
@@ -122,21 +124,37 @@ def inline_chains(binary, addresses):
     return chains
 
 
-def call_lines(source, functions):
-    """The numbers (as text) of the lines of `source` that call one of `functions`."""
+def source_files(source):
+    """The files of SOURCE: itself, or the Rust files of the folder, as paths from it."""
+    if not os.path.isdir(source):
+        return [source]
+    folder = source.rstrip("/") + "/"
+    return sorted(folder + name for name in os.listdir(folder) if name.endswith(".rs"))
+
+
+def source_file(path, files):
+    """The file of `files` that the frame's `path` names, or None."""
+    return next((f for f in files if path.endswith(f)), None)
+
+
+def call_lines(files, functions):
+    """The lines of `files` ("path:number") that call one of `functions`."""
     if not functions:
         return set()
     call = re.compile(r"\b(" + "|".join(map(re.escape, functions)) + r")\(")
-    with open(source) as text:
-        return {str(number) for number, line in enumerate(text, 1)
-                if call.search(line) and not re.search(r"\bfn\s", line)}
+    calls = set()
+    for source in files:
+        with open(source) as text:
+            calls |= {f"{source}:{number}" for number, line in enumerate(text, 1)
+                      if call.search(line) and not re.search(r"\bfn\s", line)}
+    return calls
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("profile", help="callgrind output made with --dump-instr=yes")
     parser.add_argument("binary", help="the profiled binary")
-    parser.add_argument("source", help="the source file whose lines to group by")
+    parser.add_argument("source", help="the source file (or folder) whose lines to group by")
     parser.add_argument("--expand", action="append", default=[], metavar="FUNCTION",
                         help="look inside SOURCE's calls of FUNCTION (repeatable)")
     parser.add_argument("--top", type=int, default=40, help="groups to print (40)")
@@ -150,24 +168,28 @@ def main():
     if not costs:
         sys.exit(f"inline-lines: no costs in {args.profile} (made with --dump-instr=yes?)")
     chains = inline_chains(args.binary, {address for address, _ in costs if address is not None})
-    expand = call_lines(args.source, args.expand)
+    files = source_files(args.source)
+    expand = call_lines(files, args.expand)
     groups = collections.Counter()
     for (address, function), cost in costs.items():
         chain = chains.get(address, [])
-        frames = [f for f in chain if f.rsplit(":", 1)[0].endswith(args.source)]
-        lines = [f.rsplit(":", 1)[1] for f in frames]
+        lines = []
+        for path, number in (f.rsplit(":", 1) for f in chain):
+            file = source_file(path, files)
+            if file:
+                lines.append(f"{file}:{number}")
         if not lines:
             groups[outside_group(function, chain, args.source)] += cost
             continue
-        key = lines[-1]
-        if len(lines) > 1 and key in expand:
-            key = lines[-2]
-        groups[f"{args.source}:{key}"] += cost
+        i = len(lines) - 1
+        while i > 0 and lines[i] in expand:
+            i -= 1
+        groups[lines[i]] += cost
     total = sum(groups.values())
     unit = "samples" if args.perf else "instructions"
     print(f"{total:,} {unit} in all")
     if args.stages:
-        print_stages(groups, read_stages(args.stages), args.source, args.top, unit)
+        print_stages(groups, read_stages(args.stages), files, args.top, unit)
         return
     for group, cost in groups.most_common(args.top):
         print(f"{cost / 1e6:10.1f} M {100 * cost / total:5.1f}%  {group}")
@@ -205,18 +227,19 @@ def read_stages(path):
     return stages
 
 
-def print_stages(groups, stages, source, top, unit):
+def print_stages(groups, stages, files, top, unit):
     """Each stage's cost and share of the groups outside stage "-", then the
     groups no stage takes."""
-    with open(source) as text:
-        source_lines = [line.strip() for line in text]
+    source_lines = {}
+    for source in files:
+        with open(source) as text:
+            source_lines[source] = [line.strip() for line in text]
     sums = collections.Counter()
     unassigned = collections.Counter()
-    prefix = f"{source}:"
     for group, cost in groups.items():
-        if group.startswith(prefix):
-            number = group[len(prefix):]
-            subject = source_lines[int(number) - 1] if number.isdigit() else "?"
+        file, _, number = group.rpartition(":")
+        if file in source_lines:
+            subject = source_lines[file][int(number) - 1] if number.isdigit() else "?"
         else:
             subject = group
         stage = next((name for name, pattern in stages if pattern.search(subject)), None)

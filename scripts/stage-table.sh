@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The stream renderer's tile loop by stage (BENCHMARKS.md, issue 33): one render of SCENE
 # (1 thread, SAH BVH, no skybox), its instructions counted by callgrind and its time
-# sampled by perf, each instruction or sample put at the line of render/stream.rs whose
+# sampled by perf, each instruction or sample put at the line of render/stream/ whose
 # statement it serves through every inlined call (scripts/inline-lines.py), and the lines
 # summed into the stages of scripts/stream-stages.txt. Prints a Markdown table; with
 # --time, the time alone (no callgrind, which takes fifty times the render).
@@ -29,7 +29,8 @@ render=("$binary" render "$shared/scenes/$scene.p3f" --threads 1 --accel bvh --n
         --spp "$spp" $resolution -o "$out/image.png")
 perf record -q -e cpu-clock -F 20000 -o "$out/perf.data" -- "${render[@]}" 2>/dev/null
 stages() {
-  scripts/inline-lines.py "$@" "$binary" src/render/stream.rs --expand shade_depth \
+  scripts/inline-lines.py "$@" "$binary" src/render/stream/ --expand shade_depth \
+    --expand trace_hits --expand shade_lit --expand spawn \
     --stages scripts/stream-stages.txt --top 0
 }
 stages --perf "$out/perf.data" >"$out/time"

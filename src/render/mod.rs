@@ -3,7 +3,7 @@
 //!
 //! [`render`] builds the structure and loads the skybox side by side, then renders the
 //! tiles of the region on rayon's threads: one ray at a time, or (the default) as a
-//! stream per tile (`stream.rs`). The stream takes a tile's primary samples by blocks of
+//! stream per tile (`stream/`). The stream takes a tile's primary samples by blocks of
 //! 4 x 2 pixels, each pixel's samples in order, so a packet's lanes are eight pixels at
 //! 1 spp and one pixel's samples from 8 spp up; their rays are made eight at a time. Each
 //! pixel sums its samples in one order whatever the mode, and tiles write their own block

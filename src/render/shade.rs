@@ -5,7 +5,7 @@
 //! each light sends a hit, from where, is for [`super::light`] to say.
 //!
 //! A hit is shaded in two steps, so that the scalar recursion ([`Shader::trace`]) and the
-//! stream renderer (`stream.rs`) compute the same colours: Blinn-Phong over the lights
+//! stream renderer (`stream/`) compute the same colours: Blinn-Phong over the lights
 //! given each one's shadow ray and answer ([`Phong::light`], which the stream renderer
 //! computes for eight hits at a time with its twin [`Phong8::light`]), and `spawn`, which
 //! hands on the reflected ray and then the transmitted one with their weights (their
