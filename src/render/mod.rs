@@ -402,22 +402,7 @@ impl<'s> Stage<'s> {
             tiles: &tiles,
             progress: &progress,
         };
-        let (rays, work) = match options.count {
-            false => {
-                let mut work = vec![Work::<NoCount>::default(); tiles.len() * block];
-                (
-                    pool.install(|| frame.trace(&mut tile_pixels, &mut work)),
-                    None,
-                )
-            }
-            true => {
-                let mut work = vec![Work::<Tally>::default(); tiles.len() * block];
-                let rays = pool.install(|| frame.trace(&mut tile_pixels, &mut work));
-                let mut pixels = vec![Work::default(); region.pixels() as usize];
-                place(&tiles, &work, region, options.height, &mut pixels);
-                (rays, Some(RenderWork { pixels }))
-            }
-        };
+        let (rays, work) = pool.install(|| frame.trace_counting(&mut tile_pixels, region));
         let elapsed = start.elapsed();
         progress.finish();
         if options
@@ -462,6 +447,26 @@ struct Frame<'f> {
 }
 
 impl Frame<'_> {
+    /// Renders every tile on the current thread pool into its block of `pixels`, and
+    /// returns the rays traced and, where the render counts, the work of each pixel of
+    /// `region`.
+    fn trace_counting(
+        &self,
+        pixels: &mut [Vec3],
+        region: Region,
+    ) -> (RayCounts, Option<RenderWork>) {
+        let room = self.tiles.len() * (TILE * TILE) as usize;
+        if !self.options.count {
+            let mut work = vec![Work::<NoCount>::default(); room];
+            return (self.trace(pixels, &mut work), None);
+        }
+        let mut work = vec![Work::<Tally>::default(); room];
+        let rays = self.trace(pixels, &mut work);
+        let mut counted = vec![Work::default(); region.pixels() as usize];
+        place(self.tiles, &work, region, self.options.height, &mut counted);
+        (rays, Some(RenderWork { pixels: counted }))
+    }
+
     /// Renders every tile on the current thread pool into its block of `pixels` and of
     /// `work`, and returns the rays traced.
     fn trace<C: Count>(&self, pixels: &mut [Vec3], work: &mut [Work<C>]) -> RayCounts {
