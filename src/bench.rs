@@ -547,7 +547,7 @@ impl Spread {
 /// for packets, how many of a packet's lanes are active at a node visited and at a
 /// leaf tested, on average (visits finished one ray at a time count as one lane).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Work {
+pub struct PathWork {
     pub ray_set: &'static str,
     pub api: &'static str,
     pub rays: usize,
@@ -556,7 +556,7 @@ pub struct Work {
     pub lanes_at_leaves: Option<f64>,
 }
 
-impl Work {
+impl PathWork {
     /// The work of `set`'s rays whose counts are `tallies`, traced along `path`.
     pub fn new(set: &RaySet, (api, path): (&'static str, Path), tallies: &[Tally]) -> Self {
         let counters = Counter::ALL
@@ -569,7 +569,7 @@ impl Work {
             let visits = tallies.iter().map(share).sum::<u64>() as f64 / SHARE as f64;
             (path != Path::Single && visits > 0.0).then(|| events as f64 / visits)
         };
-        Work {
+        PathWork {
             ray_set: set.name,
             api,
             rays: tallies.len(),
@@ -609,10 +609,10 @@ impl Work {
 
 /// The work of every set along every path, counted on `pool` (counts do not depend on
 /// the thread count).
-pub fn work(tracer: &Tracer, sets: &[RaySet], pool: &rayon::ThreadPool) -> Vec<Work> {
+pub fn work(tracer: &Tracer, sets: &[RaySet], pool: &rayon::ThreadPool) -> Vec<PathWork> {
     sets.iter()
         .flat_map(|set| {
-            PATHS.map(|path| Work::new(set, path, &count_set(tracer, set, path.1, pool)))
+            PATHS.map(|path| PathWork::new(set, path, &count_set(tracer, set, path.1, pool)))
         })
         .collect()
 }

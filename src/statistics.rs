@@ -7,7 +7,7 @@ use std::path::Path;
 use std::time::Duration;
 
 use p3trace::accel::count::Counter;
-use p3trace::bench::{Line, Work};
+use p3trace::bench::{Line, PathWork};
 use p3trace::imaging::format::ImageOutput;
 use p3trace::machine;
 use p3trace::render::{RenderOptions, RenderReport, RenderWork};
@@ -111,7 +111,7 @@ pub struct BenchRun<'a> {
     pub reps: u32,
     pub lines: &'a [Line],
     /// Each set's work along each path, with `--stats`.
-    pub work: &'a [Work],
+    pub work: &'a [PathWork],
 }
 
 pub fn bench(run: &BenchRun) -> Value {
@@ -149,7 +149,7 @@ pub fn bench(run: &BenchRun) -> Value {
 
 /// One set's work along one path: each counter's spread per ray and, for packets, the
 /// lanes active at nodes and leaves.
-fn work(w: &Work) -> Value {
+fn work(w: &PathWork) -> Value {
     let mut counters = serde_json::Map::new();
     for (counter, s) in &w.counters {
         counters.insert(

@@ -73,7 +73,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode, Failure> {
         }
         say("# work per ray: mean, 50th, 90th and 99th percentiles, and the set's total");
         let work = bench::work(&tracer, &sets, &one);
-        for line in work.iter().flat_map(bench::Work::lines) {
+        for line in work.iter().flat_map(bench::PathWork::lines) {
             say(&line);
         }
         work

@@ -21,9 +21,7 @@ use glam::Vec3;
 use super::light::{emitters, Emitter, Receiver, DEFAULT_LIGHT_GRID};
 use super::sampler::{dim, Sample, SampleGrid, SampleRng};
 use super::skybox::Skybox;
-use crate::accel::count::Count;
-// The stream renderer (`stream.rs`) takes these from here.
-pub(super) use crate::accel::count::{RayCounts, RayKind, Work};
+use crate::accel::count::{Count, RayCounts, RayKind, Work};
 use crate::accel::{InsideAnswers, Tracer};
 use crate::intersect::{spawn_origin, Hits8, Rays8, SphereRoots, SurfacePoint, SurfacePoint8};
 use crate::prim::PrimKind;

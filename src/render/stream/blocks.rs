@@ -8,10 +8,11 @@ use bumpalo::collections::Vec as ArenaVec;
 use bumpalo::Bump;
 use glam::Vec3;
 
-use super::super::shade::{Bounce8, Profile, Shader, Work, EPS};
+use super::super::shade::{Bounce8, Profile, Shader, EPS};
 use super::answered_work;
 use super::queue::{push_reserved, ray_kind, slot, AnsweredRays, Queue, Seen};
 use super::queue::{ANSWERED, WALKED_REFLECTED, WALKED_TRANSMITTED};
+use crate::accel::count::Work;
 use crate::accel::count::{Count, CountLanes};
 use crate::accel::stream;
 use crate::intersect::{spawn_origin8, Rays8, SurfacePoint8};

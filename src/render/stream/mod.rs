@@ -31,8 +31,9 @@ use bumpalo::collections::Vec as ArenaVec;
 use bumpalo::Bump;
 use glam::Vec3;
 
-use super::shade::{RayCounts, RayKind, Shader, Work};
+use super::shade::Shader;
 use crate::accel::count::Count;
+use crate::accel::count::{RayCounts, RayKind, Work};
 pub(super) use queue::Queue;
 use queue::{at_mut, Lineage};
 

@@ -8,8 +8,8 @@ use bumpalo::Bump;
 use glam::Vec3;
 
 use super::super::sampler::Sample;
-use super::super::shade::{RayKind, Work};
 use crate::accel::count::Count;
+use crate::accel::count::{RayKind, Work};
 use crate::accel::InsideAnswers;
 use crate::intersect::Rays8;
 use crate::ray::Ray;

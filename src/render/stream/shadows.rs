@@ -7,11 +7,12 @@ use bumpalo::Bump;
 use glam::Vec3;
 
 use super::super::light::{Incident8, Receiver};
-use super::super::shade::{Phong8, RayCounts, Shader};
+use super::super::shade::{Phong8, Shader};
 use super::answered_work;
 use super::blocks::HitBlock;
 use super::queue::{at, at_mut, Queue};
 use crate::accel::count::Count;
+use crate::accel::count::RayCounts;
 use crate::accel::stream::{self, Answers};
 use crate::intersect::Rays8;
 use crate::ray::Ray;

@@ -4,10 +4,11 @@
 
 use bumpalo::Bump;
 
-use super::super::shade::{Bounce8, Optics8, RayCounts, RayKind, Shader};
+use super::super::shade::{Bounce8, Optics8, Shader};
 use super::blocks::HitBlock;
 use super::queue::{at, ray_kind, Lineage, Parts, Queue, WALKED_REFLECTED, WALKED_TRANSMITTED};
 use crate::accel::count::Count;
+use crate::accel::count::{RayCounts, RayKind};
 use crate::ray::Ray;
 use crate::simd::{for_lanes, F32x8, Mask8};
 
