@@ -11,8 +11,8 @@ use glam::Vec3;
 
 use super::{first_root_in, first_root_in_lanes};
 use super::{
-    Aabb, LeafPack, PacketHits, PacketQuery, RayQuery, Shapes, SurfacePoint, TriangleHit,
-    TriangleHit8, Vec3s,
+    Aabb, LeafPack, PacketHits, PacketQuery, RayQuery, ShapeHit, ShapeHit8, Shapes, SurfacePoint,
+    Vec3s,
 };
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, F32xP, Floats, LaneBits, Mask8, MaskP, Vec3Lanes, Vec3x8, Vec3xP};
@@ -198,9 +198,9 @@ impl LeafPack for Boxes {
     }
 
     #[inline]
-    fn leaf<const FRAME: usize>(pack: &BoxPack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
+    fn leaf<const FRAME: usize>(pack: &BoxPack8, query: &RayQuery, t_max: f32) -> ShapeHit8 {
         let (ray, inv_dir) = (&query.ray, query.inv_dir);
-        TriangleHit8::at(aabb_leaf(ray, inv_dir, pack, query.t_min, t_max))
+        ShapeHit8::at(aabb_leaf(ray, inv_dir, pack, query.t_min, t_max))
     }
 
     #[inline(always)]
@@ -256,9 +256,9 @@ impl Shapes for Boxes {
         }
     }
 
-    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<ShapeHit> {
         let (ray, inv_dir, t_min) = (&query.ray, query.inv_dir, query.t_min);
-        aabb(ray, inv_dir, self.min.get(i), self.max.get(i), t_min, t_max).map(TriangleHit::at)
+        aabb(ray, inv_dir, self.min.get(i), self.max.get(i), t_min, t_max).map(ShapeHit::at)
     }
 
     fn intersect_packet(

@@ -10,8 +10,8 @@
 use glam::Vec3;
 
 use super::{
-    gamma, max_num, trusted_box, Aabb, PacketHits, PacketQuery, RayQuery, Shapes, SurfacePoint,
-    TriangleHit, Vec3s,
+    gamma, max_num, trusted_box, Aabb, PacketHits, PacketQuery, RayQuery, ShapeHit, Shapes,
+    SurfacePoint, Vec3s,
 };
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32xP, LaneBits, MaskP, Vec3xP};
@@ -186,12 +186,12 @@ impl Shapes for Cones {
         disc(base, self.r_base[i]).union(disc(apex, self.r_apex[i]))
     }
 
-    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<ShapeHit> {
         let (base, axis, height) = (self.base.get(i), self.axis.get(i), self.height[i]);
         let (r_base, r_apex, t_min) = (self.r_base[i], self.r_apex[i], query.t_min);
         cone(&query.ray, base, axis, height, r_base, r_apex, t_min, t_max)
             .filter(|&t| query.holds(trusted_box(self.bounds(i, [0.0; 2]), 0.0), t))
-            .map(TriangleHit::at)
+            .map(ShapeHit::at)
     }
 
     fn intersect_packet(

@@ -71,20 +71,76 @@ pub use sphere::{
 };
 pub use triangle::{
     frame_of, triangle, triangle_leaf, triangle_packet, Axis, Shear, ShearLanes, Triangle,
-    TriangleHit, TriangleHit8, TriangleHits, TrianglePack8, Triangles,
+    TrianglePack8, Triangles,
 };
 
-/// A packet's lanes of [`TriangleHit`], as its kernels give them.
-pub type PacketHits = TriangleHits<F32xP>;
+/// A packet's lanes of [`ShapeHit`], as its kernels give them.
+pub type PacketHits = ShapeHits<F32xP>;
 
 use std::cell::OnceCell;
 
 use glam::{DVec3, Vec3};
 
-use crate::ray::{Ray, RayPacket};
+use crate::ray::{lane_mask, Ray, RayPacket};
 use crate::simd::{
-    bits_where, Bits, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3x8,
+    bits_where, Bits, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3x8, PACKET,
 };
+
+/// What a primitive's test answers: the distance along the ray and, for a triangle, the
+/// barycentric coordinates of the point, `(1 - u - v) p0 + u p1 + v p2` (zero for the
+/// other kinds).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShapeHit {
+    pub t: f32,
+    pub u: f32,
+    pub v: f32,
+}
+
+impl ShapeHit {
+    /// A hit at `t` with no barycentrics: the hits of the other kinds.
+    pub fn at(t: f32) -> Self {
+        ShapeHit { t, u: 0.0, v: 0.0 }
+    }
+}
+
+/// Lanes of [`ShapeHit`]: lane `i` hit when `hit` has it; `t`, `u` and `v` of a lane
+/// that misses are unspecified.
+#[derive(Clone, Copy, Debug)]
+pub struct ShapeHits<F: Floats> {
+    pub hit: F::Mask,
+    pub t: F,
+    pub u: F,
+    pub v: F,
+}
+
+/// Eight lanes of [`ShapeHit`].
+pub type ShapeHit8 = ShapeHits<F32x8>;
+
+impl<F: Floats> ShapeHits<F> {
+    /// Hits at `t` with no barycentrics: the hits of the other kinds.
+    pub fn at((hit, t): (F::Mask, F)) -> Self {
+        ShapeHits {
+            hit,
+            t,
+            u: F::splat(0.0),
+            v: F::splat(0.0),
+        }
+    }
+}
+
+impl PacketHits {
+    /// The hit of each lane (a miss's lanes zero).
+    pub fn from_lanes(hits: [Option<ShapeHit>; PACKET]) -> Self {
+        let lane =
+            |field: fn(&ShapeHit) -> f32| F32xP::from_fn(|k| hits[k].as_ref().map_or(0.0, field));
+        ShapeHits {
+            hit: MaskP::from_bitmask(lane_mask(|k| hits[k].is_some())),
+            t: lane(|h| h.t),
+            u: lane(|h| h.u),
+            v: lane(|h| h.v),
+        }
+    }
+}
 
 /// The storage of one primitive kind, and what the layers above ask of a primitive `i`
 /// of it. Implemented in the kind's own file; [`crate::scene::Geometry`] dispatches to it.
@@ -109,7 +165,7 @@ pub trait Shapes {
 
     /// The scalar test: the closest hit of `query` in `(query.t_min, t_max)`, with
     /// barycentrics for triangles (zero for other kinds).
-    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit>;
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<ShapeHit>;
 
     /// [`Shapes::intersect`] for the lanes `active` of `query`'s packet, each within
     /// `(packet.t_min, t_max)` lane by lane (the packet's own bounds, or tighter ones a
@@ -272,7 +328,7 @@ pub trait LeafPack: Shapes {
     /// One ray against the eight slots of `pack`, within `(query.t_min, t_max)`. `FRAME`
     /// is the ray's frame ([`frame_of`]), which the triangle test specialises on and the
     /// other kinds ignore: a walk takes it once (`with_frame!`).
-    fn leaf<const FRAME: usize>(pack: &Self::Pack, query: &RayQuery, t_max: f32) -> TriangleHit8;
+    fn leaf<const FRAME: usize>(pack: &Self::Pack, query: &RayQuery, t_max: f32) -> ShapeHit8;
 
     /// The primitive in slot `slot` of `pack` against the lanes `active` of `query`'s
     /// packet, as [`Shapes::intersect_packet`] tests a primitive of the storage.

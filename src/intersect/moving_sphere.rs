@@ -4,7 +4,7 @@
 use glam::{DVec3, Vec3};
 
 use super::sphere::{sphere, sphere_bounds, sphere_surface_point, trusted_sphere_box};
-use super::{Aabb, RayQuery, Shapes, SurfacePoint, TriangleHit, Vec3s};
+use super::{Aabb, RayQuery, ShapeHit, Shapes, SurfacePoint, Vec3s};
 use crate::ray::Ray;
 
 /// Spheres whose centre moves linearly from `centre0` at `time0` to `centre1` at `time1`.
@@ -56,14 +56,14 @@ impl Shapes for MovingSpheres {
             .union(sphere_bounds(self.centre_at(i, shutter[1]), r))
     }
 
-    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<ShapeHit> {
         let (ray, radius) = (&query.ray, self.radius[i]);
         let centre = self.centre_at(i, ray.time);
         // The box at the ray's time lies in the structures' box over any shutter that
         // holds the time: the centre moves monotonically, and the margin grows with it.
         sphere(ray, centre, radius, query.t_min, t_max)
             .filter(|&t| query.holds(trusted_sphere_box(centre, radius, query.options), t))
-            .map(TriangleHit::at)
+            .map(ShapeHit::at)
     }
 
     fn normal(&self, i: usize, p: Vec3, _u: f32, _v: f32, time: f32) -> Vec3 {

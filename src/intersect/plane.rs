@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::{
-    gamma, Aabb, PacketHits, PacketQuery, RayQuery, Shapes, SurfacePoint, TriangleHit, Vec3s,
+    gamma, Aabb, PacketHits, PacketQuery, RayQuery, ShapeHit, Shapes, SurfacePoint, Vec3s,
 };
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32xP, LaneBits, MaskP, Vec3xP};
@@ -69,9 +69,9 @@ impl Shapes for Planes {
         }
     }
 
-    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<ShapeHit> {
         let (normal, offset) = (self.normal.get(i), self.offset[i]);
-        plane(&query.ray, normal, offset, query.t_min, t_max).map(TriangleHit::at)
+        plane(&query.ray, normal, offset, query.t_min, t_max).map(ShapeHit::at)
     }
 
     fn intersect_packet(

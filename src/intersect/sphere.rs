@@ -7,7 +7,7 @@ use glam::{DVec3, Vec3};
 use super::{first_root_in, first_root_in_lanes, holds_lanes8};
 use super::{
     gamma, trusted_box, Aabb, BoxPack8, Hits8, IntersectOptions, LeafPack, PacketHits, PacketQuery,
-    RayQuery, Rays8, Shapes, SurfacePoint, SurfacePoint8, TriangleHit, TriangleHit8,
+    RayQuery, Rays8, ShapeHit, ShapeHit8, Shapes, SurfacePoint, SurfacePoint8,
 };
 
 use crate::ray::{Ray, RayPacket};
@@ -262,14 +262,14 @@ impl LeafPack for Spheres {
 
     /// The kernel's hits that lie in their sphere's trusted box (as [`Shapes::intersect`]).
     #[inline(always)]
-    fn leaf<const FRAME: usize>(pack: &SpherePack8, query: &RayQuery, t_max: f32) -> TriangleHit8 {
+    fn leaf<const FRAME: usize>(pack: &SpherePack8, query: &RayQuery, t_max: f32) -> ShapeHit8 {
         let roots = query.options.sphere_roots;
         let (hit, t) = sphere_leaf(&query.ray, pack, roots, query.t_min, t_max);
         if hit.none() {
-            return TriangleHit8::at((hit, t));
+            return ShapeHit8::at((hit, t));
         }
         let trusted = trusted_sphere_boxes8(pack.centre, pack.radius, query.options);
-        TriangleHit8::at((hit & query.holds8(trusted, t), t))
+        ShapeHit8::at((hit & query.holds8(trusted, t), t))
     }
 
     #[inline(always)]
@@ -391,7 +391,7 @@ impl Shapes for Spheres {
     }
 
     #[inline]
-    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<ShapeHit> {
         let (ray, t_min) = (&query.ray, query.t_min);
         let Sphere { centre, radius, .. } = self.records[i];
         match query.options.sphere_roots {
@@ -399,7 +399,7 @@ impl Shapes for Spheres {
             SphereRoots::Textbook => sphere_textbook(ray, centre, radius, t_min, t_max),
         }
         .filter(|&t| query.holds(trusted_sphere_box(centre, radius, query.options), t))
-        .map(TriangleHit::at)
+        .map(ShapeHit::at)
     }
 
     fn intersect_packet(

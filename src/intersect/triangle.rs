@@ -51,29 +51,13 @@ use glam::{DVec3, Vec3};
 
 use super::{
     gamma, trusted_box, Aabb, BoxPack8, BoxRays, Hits8, IntersectOptions, LeafPack, PacketHits,
-    PacketQuery, RayQuery, Shapes, SurfacePoint, SurfacePoint8,
+    PacketQuery, RayQuery, ShapeHit, ShapeHit8, ShapeHits, Shapes, SurfacePoint, SurfacePoint8,
 };
-use crate::ray::{lane_mask, Ray, RayPacket};
+use crate::ray::{Ray, RayPacket};
 use crate::simd::{
     for_lanes, Bits, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, MaskP, Vec3Lanes, Vec3x8,
-    Vec3xP, PACKET,
+    Vec3xP,
 };
-
-/// Distance and barycentric coordinates of a ray-triangle hit: the point is
-/// `(1 - u - v) p0 + u p1 + v p2`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TriangleHit {
-    pub t: f32,
-    pub u: f32,
-    pub v: f32,
-}
-
-impl TriangleHit {
-    /// A hit at `t` with no barycentrics: the hits of the other kinds.
-    pub fn at(t: f32) -> Self {
-        TriangleHit { t, u: 0.0, v: 0.0 }
-    }
-}
 
 /// An axis of space, as a ray's frame ([`Shear`]) takes them: an index that needs no
 /// bounds check.
@@ -347,7 +331,7 @@ fn straddles([u, v, w]: [f32; 3]) -> bool {
 /// The watertight test against the triangle `vertices` for the ray set up as `shear`:
 /// the hit in `(t_min, inf)`, before the trusted box and `t_max` settle it.
 #[inline(always)]
-fn watertight(shear: &Shear, vertices: [Vec3; 3], t_min: f32) -> Option<TriangleHit> {
+fn watertight(shear: &Shear, vertices: [Vec3; 3], t_min: f32) -> Option<ShapeHit> {
     let [p0, p1, p2] = vertices;
     let (a, b, c) = (shear.relative(p0), shear.relative(p1), shear.relative(p2));
     let Vec3 {
@@ -380,7 +364,7 @@ fn watertight(shear: &Shear, vertices: [Vec3; 3], t_min: f32) -> Option<Triangle
 /// frame's `z` puts the vertices at `depths`, in `(t_min, inf)`: none where the
 /// determinant, their sum, is zero or not finite.
 #[inline(always)]
-fn hit_of(edges: [f32; 3], depths: [f32; 3], sz: f32, t_min: f32) -> Option<TriangleHit> {
+fn hit_of(edges: [f32; 3], depths: [f32; 3], sz: f32, t_min: f32) -> Option<ShapeHit> {
     let [u, v, w] = edges;
     let det = u + v + w;
     if det == 0.0 || !det.is_finite() {
@@ -388,7 +372,7 @@ fn hit_of(edges: [f32; 3], depths: [f32; 3], sz: f32, t_min: f32) -> Option<Tria
     }
     let inv_det = 1.0 / det;
     let t = (u * depths[0] + v * depths[1] + w * depths[2]) * sz * inv_det;
-    (t > t_min).then_some(TriangleHit {
+    (t > t_min).then_some(ShapeHit {
         t,
         u: v * inv_det,
         v: w * inv_det,
@@ -405,7 +389,7 @@ fn watertight_lanes<F: Floats>(
     [sx, sy, sz]: [F; 3],
     t_min: F,
     asked: F::Mask,
-) -> (TriangleHits<F>, F::Mask) {
+) -> (ShapeHits<F>, F::Mask) {
     let sheared = |p: Vec3Lanes<F>| [p.x - sx * p.z, p.y - sy * p.z];
     let (a2, b2, c2) = (sheared(a), sheared(b), sheared(c));
     let [u, v, w] = [edge(b2, c2), edge(c2, a2), edge(a2, b2)];
@@ -421,7 +405,7 @@ fn watertight_lanes<F: Floats>(
     let t = (u * a.z + v * b.z + w * c.z) * sz * inv_det;
     // The edge functions of a lane inside and not exact are all of one sign and none zero,
     // so the determinant is zero in none: finite is what is left to ask.
-    let hits = TriangleHits {
+    let hits = ShapeHits {
         hit: inside.and_not(exact) & (det.is_finite() & t.gt(t_min)),
         t,
         u: v * inv_det,
@@ -434,7 +418,7 @@ fn watertight_lanes<F: Floats>(
 /// edges and vertices count as inside. NaN vertices (how [`Triangles`] stores a triangle
 /// of zero area) are never hit. A hit lies in the triangle's box as the structures hold
 /// it, single precision's where it does, else double precision's (the module's comment).
-pub fn triangle(ray: &Ray, vertices: [Vec3; 3], t_min: f32, t_max: f32) -> Option<TriangleHit> {
+pub fn triangle(ray: &Ray, vertices: [Vec3; 3], t_min: f32, t_max: f32) -> Option<ShapeHit> {
     let query = RayQuery::new(ray, t_min, IntersectOptions::default());
     triangle_hit(&query, vertices, t_max)
 }
@@ -442,7 +426,7 @@ pub fn triangle(ray: &Ray, vertices: [Vec3; 3], t_min: f32, t_max: f32) -> Optio
 /// The body of [`triangle`] for a query. Out of line, as [`triangle`] was: inlined, it
 /// grows `Geometry::intersect` for every kind (+0.4% on `bench balls_high`).
 #[inline(never)]
-fn triangle_hit(query: &RayQuery, vertices: [Vec3; 3], t_max: f32) -> Option<TriangleHit> {
+fn triangle_hit(query: &RayQuery, vertices: [Vec3; 3], t_max: f32) -> Option<ShapeHit> {
     let hit = watertight(&Shear::of(query), vertices, query.t_min)?;
     if in_trusted_box(query, vertices, hit.t) {
         return (hit.t < t_max).then_some(hit);
@@ -478,7 +462,7 @@ fn in_trusted_box(query: &RayQuery, vertices: [Vec3; 3], t: f32) -> bool {
 /// single precision takes: the hit of a candidate that single precision found outside the
 /// box (see the module's comment). Zero counts as inside, as in single precision.
 #[inline(never)]
-fn refined(ray: &Ray, vertices: [Vec3; 3], t_min: f32, t_max: f32) -> Option<TriangleHit> {
+fn refined(ray: &Ray, vertices: [Vec3; 3], t_min: f32, t_max: f32) -> Option<ShapeHit> {
     let [x, y, z] = FRAMES[frame_of(ray.dir)].map(|axis| axis as usize);
     let (origin, dir) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
     let sz = 1.0 / dir[z];
@@ -498,7 +482,7 @@ fn refined(ray: &Ray, vertices: [Vec3; 3], t_min: f32, t_max: f32) -> Option<Tri
     }
     let t = ((u * a[2] + v * b[2] + w * c[2]) * sz / det) as f32;
     let (u, v) = ((v / det) as f32, (w / det) as f32);
-    (t > t_min && t < t_max).then_some(TriangleHit { t, u, v })
+    (t > t_min && t < t_max).then_some(ShapeHit { t, u, v })
 }
 
 /// The candidates of `hits` (single precision's, [`watertight_lanes`]) settled as
@@ -507,11 +491,11 @@ fn refined(ray: &Ray, vertices: [Vec3; 3], t_min: f32, t_max: f32) -> Option<Tri
 /// `scalar(k)`, the scalar test of lane `k`.
 #[inline(always)]
 fn settle<F: Floats>(
-    hits: &mut TriangleHits<F>,
+    hits: &mut ShapeHits<F>,
     trusted: F::Mask,
     exact: F::Mask,
     t_max: F,
-    scalar: impl Fn(usize) -> Option<TriangleHit>,
+    scalar: impl Fn(usize) -> Option<ShapeHit>,
 ) {
     let others = (hits.hit.and_not(trusted) | exact).bitmask();
     hits.hit = hits.hit & trusted & hits.t.lt(t_max);
@@ -525,10 +509,10 @@ fn settle<F: Floats>(
 #[cold]
 #[inline(never)]
 fn scalar_lanes<F: Floats>(
-    mut hits: TriangleHits<F>,
+    mut hits: ShapeHits<F>,
     lanes: <F::Mask as LaneMask>::Bits,
-    scalar: impl Fn(usize) -> Option<TriangleHit>,
-) -> TriangleHits<F> {
+    scalar: impl Fn(usize) -> Option<ShapeHit>,
+) -> ShapeHits<F> {
     let mut mask = hits.hit.bitmask();
     for_lanes(lanes, |k| {
         if let Some(hit) = scalar(k) {
@@ -540,46 +524,6 @@ fn scalar_lanes<F: Floats>(
     });
     hits.hit = F::Mask::from_bitmask(mask);
     hits
-}
-
-/// Lanes of [`TriangleHit`]: lane `i` hit when `hit` has it; `t`, `u` and `v` of a lane
-/// that misses are unspecified.
-#[derive(Clone, Copy, Debug)]
-pub struct TriangleHits<F: Floats> {
-    pub hit: F::Mask,
-    pub t: F,
-    pub u: F,
-    pub v: F,
-}
-
-/// Eight lanes of [`TriangleHit`].
-pub type TriangleHit8 = TriangleHits<F32x8>;
-
-impl<F: Floats> TriangleHits<F> {
-    /// Hits at `t` with no barycentrics: the hits of the other kinds.
-    pub fn at((hit, t): (F::Mask, F)) -> Self {
-        TriangleHits {
-            hit,
-            t,
-            u: F::splat(0.0),
-            v: F::splat(0.0),
-        }
-    }
-}
-
-impl PacketHits {
-    /// The hit of each lane (a miss's lanes zero).
-    pub fn from_lanes(hits: [Option<TriangleHit>; PACKET]) -> Self {
-        let lane = |field: fn(&TriangleHit) -> f32| {
-            F32xP::from_fn(|k| hits[k].as_ref().map_or(0.0, field))
-        };
-        TriangleHits {
-            hit: MaskP::from_bitmask(lane_mask(|k| hits[k].is_some())),
-            t: lane(|h| h.t),
-            u: lane(|h| h.u),
-            v: lane(|h| h.v),
-        }
-    }
 }
 
 /// Eight triangles side by side for [`triangle_leaf`]: their vertices per axis, with
@@ -697,7 +641,7 @@ fn packet_hits(
 }
 
 /// [`triangle`] for one ray against the eight triangles of a pack.
-pub fn triangle_leaf(ray: &Ray, pack: &TrianglePack8, t_min: f32, t_max: f32) -> TriangleHit8 {
+pub fn triangle_leaf(ray: &Ray, pack: &TrianglePack8, t_min: f32, t_max: f32) -> ShapeHit8 {
     let query = RayQuery::new(ray, t_min, IntersectOptions::default());
     with_frame!(frame_of(ray.dir), FRAME => leaf_hits::<FRAME>(&query, pack, t_max))
 }
@@ -706,11 +650,7 @@ pub fn triangle_leaf(ray: &Ray, pack: &TrianglePack8, t_min: f32, t_max: f32) ->
 /// are constants, so the vertices' coordinates are read where they lie, waiting for no
 /// choice of frame, and the test makes no choice per leaf.
 #[inline(always)]
-fn leaf_hits<const FRAME: usize>(
-    query: &RayQuery,
-    pack: &TrianglePack8,
-    t_max: f32,
-) -> TriangleHit8 {
+fn leaf_hits<const FRAME: usize>(query: &RayQuery, pack: &TrianglePack8, t_max: f32) -> ShapeHit8 {
     let shear = &Shear::on(query, FRAMES[FRAME]);
     let (t_min, t_max) = (F32x8::splat(query.t_min), F32x8::splat(t_max));
     let [p0, p1, p2] = &pack.vertices;
@@ -845,11 +785,7 @@ impl LeafPack for Triangles {
     const FRAMED: bool = true;
 
     #[inline(always)]
-    fn leaf<const FRAME: usize>(
-        pack: &TrianglePack8,
-        query: &RayQuery,
-        t_max: f32,
-    ) -> TriangleHit8 {
+    fn leaf<const FRAME: usize>(pack: &TrianglePack8, query: &RayQuery, t_max: f32) -> ShapeHit8 {
         leaf_hits::<FRAME>(query, pack, t_max)
     }
 
@@ -891,7 +827,7 @@ impl Shapes for Triangles {
     }
 
     #[inline]
-    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+    fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<ShapeHit> {
         triangle_hit(query, self.records[i].vertices, t_max)
     }
 

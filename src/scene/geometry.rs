@@ -6,8 +6,8 @@
 use glam::{DVec3, Vec3};
 
 use crate::intersect::{
-    Aabb, Hits8, IntersectOptions, PacketHits, PacketQuery, RayQuery, Rays8, Shapes, SurfacePoint,
-    SurfacePoint8, TriangleHit,
+    Aabb, Hits8, IntersectOptions, PacketHits, PacketQuery, RayQuery, Rays8, ShapeHit, Shapes,
+    SurfacePoint, SurfacePoint8,
 };
 use crate::prim::{prim_kinds, PrimId, PrimKind};
 use crate::ray::Ray;
@@ -60,7 +60,7 @@ macro_rules! define_geometry {
             /// The scalar test of one primitive: the closest hit of `query` in
             /// `(query.t_min, t_max)`, with barycentrics for triangles.
             #[inline]
-            pub fn intersect(&self, prim: PrimId, query: &RayQuery, t_max: f32) -> Option<TriangleHit> {
+            pub fn intersect(&self, prim: PrimId, query: &RayQuery, t_max: f32) -> Option<ShapeHit> {
                 match prim.kind() {
                     $(PrimKind::$kind => self.$field.intersect(prim.index(), query, t_max),)*
                 }

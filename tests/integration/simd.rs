@@ -10,8 +10,8 @@ use std::cell::OnceCell;
 use glam::{Vec2, Vec3};
 use p3trace::intersect::{
     self, Aabb, BoxPack8, BoxRay, BoxRays, Boxes, Hits8, IntersectOptions, Intervals, LeafPack,
-    PacketQuery, RayQuery, Rays8, Shapes, Shear, ShearLanes, SpherePack8, SphereRoots, Spheres,
-    SurfacePoint, SurfacePoint8, TriangleHit, TriangleHits, TrianglePack8, Triangles,
+    PacketQuery, RayQuery, Rays8, ShapeHit, ShapeHits, Shapes, Shear, ShearLanes, SpherePack8,
+    SphereRoots, Spheres, SurfacePoint, SurfacePoint8, TrianglePack8, Triangles,
 };
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::camera::{Camera, FilmSample};
@@ -310,12 +310,7 @@ fn pack_equals_scalar<K: LeafPack>(
 }
 
 /// [`same`] for `t`, `u` and `v`.
-fn same_hit<F: Floats>(
-    what: &str,
-    lane: usize,
-    expected: Option<TriangleHit>,
-    hits: TriangleHits<F>,
-) {
+fn same_hit<F: Floats>(what: &str, lane: usize, expected: Option<ShapeHit>, hits: ShapeHits<F>) {
     same(
         &format!("{what} t"),
         lane,
