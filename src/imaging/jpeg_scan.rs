@@ -14,7 +14,7 @@ pub fn damage(bytes: &[u8]) -> Option<String> {
 }
 
 /// The components of the frame: horizontal and vertical sampling factors by id.
-struct Frame {
+struct FrameHeader {
     width: u32,
     height: u32,
     components: Vec<(u8, u32, u32)>,
@@ -70,7 +70,7 @@ fn check(bytes: &[u8]) -> Result<(), String> {
     }
 }
 
-fn read_frame(segment: &[u8]) -> Result<Frame, String> {
+fn read_frame(segment: &[u8]) -> Result<FrameHeader, String> {
     let bad = || "a bad frame header".to_string();
     let header = segment.get(..6).ok_or_else(bad)?;
     let height = u32::from(u16::from_be_bytes([header[1], header[2]]));
@@ -88,7 +88,7 @@ fn read_frame(segment: &[u8]) -> Result<Frame, String> {
     if width == 0 || height == 0 || components.is_empty() || !factors_valid {
         return Err(bad());
     }
-    Ok(Frame {
+    Ok(FrameHeader {
         width,
         height,
         components,
@@ -120,7 +120,7 @@ fn check_scan(
     bytes: &[u8],
     start: usize,
     header: &[u8],
-    frame: &Frame,
+    frame: &FrameHeader,
     tables: &[[Option<Huffman>; 4]; 2],
     restart_interval: u32,
 ) -> Result<usize, String> {

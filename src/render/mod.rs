@@ -395,14 +395,14 @@ impl<'s> Stage<'s> {
         // Each tile writes its own block of these buffers: no allocation per tile.
         let block = (TILE * TILE) as usize;
         let mut tile_pixels = vec![Vec3::ZERO; tiles.len() * block];
-        let frame = Frame {
+        let job = TileJob {
             shader: &shader,
             camera: &camera,
             options,
             tiles: &tiles,
             progress: &progress,
         };
-        let (rays, work) = pool.install(|| frame.trace_counting(&mut tile_pixels, region));
+        let (rays, work) = pool.install(|| job.trace_counting(&mut tile_pixels, region));
         let elapsed = start.elapsed();
         progress.finish();
         if options
@@ -437,8 +437,8 @@ impl<'s> Stage<'s> {
     }
 }
 
-/// What every tile of a frame shares.
-struct Frame<'f> {
+/// What every tile of a frame shares: the job its tiles are cut from.
+struct TileJob<'f> {
     shader: &'f Shader<'f>,
     camera: &'f Camera,
     options: &'f RenderOptions,
@@ -446,7 +446,7 @@ struct Frame<'f> {
     progress: &'f Meter,
 }
 
-impl Frame<'_> {
+impl TileJob<'_> {
     /// Renders every tile on the current thread pool into its block of `pixels`, and
     /// returns the rays traced and, where the render counts, the work of each pixel of
     /// `region`.
