@@ -23,25 +23,37 @@
 //! render ([`textbook_margin`]), which keeps the course renderer's images, and the rule for
 //! every other ray.
 
-use crate::intersect::{gamma, trusted_box, Aabb};
+use crate::intersect::{gamma, trusted_box, Aabb, IntersectOptions, SphereRoots};
 use crate::prim::{PrimId, PrimKind};
 use crate::scene::Geometry;
 
 /// The trusted box of a bounded primitive, over the whole `shutter` for moving ones,
-/// grown first by `sphere_margin` ([`textbook_margin`]) where its kind takes the margin of
+/// grown first by `roots_margin` ([`textbook_margin`]) where its kind takes the margin of
 /// the sphere roots ([`Geometry::takes_roots_margin`]). Non-finite primitives get the
 /// empty box (they are never hit).
 pub fn prim_bounds(
     geometry: &Geometry,
     prim: PrimId,
     shutter: [f32; 2],
-    sphere_margin: f32,
+    roots_margin: f32,
 ) -> Aabb {
     let margin = match Geometry::takes_roots_margin(prim.kind()) {
-        true => sphere_margin,
+        true => roots_margin,
         false => 0.0,
     };
     trusted_box(geometry.bounds(prim, shutter), margin).unwrap_or(Aabb::EMPTY)
+}
+
+/// `options` with the padding of the boxes its tests need over `geometry`: the textbook
+/// roots' spheres are padded further ([`textbook_margin`]).
+pub fn with_margins(options: IntersectOptions, geometry: &Geometry) -> IntersectOptions {
+    IntersectOptions {
+        roots_margin: match options.sphere_roots {
+            SphereRoots::Precise => 0.0,
+            SphereRoots::Textbook => textbook_margin(geometry),
+        },
+        ..options
+    }
 }
 
 /// How far the textbook sphere roots (the course profile's) may put a hit along the ray

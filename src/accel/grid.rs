@@ -63,19 +63,19 @@ impl Grid {
     /// The report's grid over the bounded primitives of `geometry`, `density` its `m`,
     /// moving spheres bounded over `shutter`; with `mailbox`, an object spanning several
     /// cells is tested once per ray.
-    /// Spheres' boxes are grown by `sphere_margin` (`bounds::prim_bounds`).
+    /// Spheres' boxes are grown by `roots_margin` (`bounds::prim_bounds`).
     pub fn build(
         geometry: &Geometry,
         density: f32,
         mailbox: bool,
         shutter: [f32; 2],
-        sphere_margin: f32,
+        roots_margin: f32,
     ) -> Grid {
         let mut prims = Vec::with_capacity(geometry.bounded_count());
         let mut boxes = Vec::with_capacity(geometry.bounded_count());
         for kind in PrimKind::BOUNDED {
             for prim in geometry.ids(kind) {
-                let b = prim_bounds(geometry, prim, shutter, sphere_margin);
+                let b = prim_bounds(geometry, prim, shutter, roots_margin);
                 if !b.is_empty() {
                     prims.push(prim);
                     boxes.push(b);

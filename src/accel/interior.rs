@@ -124,11 +124,11 @@ impl Rooms {
                 // grown by more than the trusted box grows them.
                 let tight = geometry.bounds(prim, shutter);
                 let scale = tight.min.abs().max(tight.max.abs()).max_element();
-                let pad = options.sphere_margin + 1e-5 * scale + 1e-30;
+                let pad = options.roots_margin + 1e-5 * scale + 1e-30;
                 if !overlap(&tight.padded(pad), &reach) {
                     continue;
                 }
-                let b = prim_bounds(geometry, prim, shutter, options.sphere_margin);
+                let b = prim_bounds(geometry, prim, shutter, options.roots_margin);
                 if b.is_empty() {
                     continue;
                 }
@@ -207,7 +207,7 @@ impl Rooms {
     /// finite).
     #[inline]
     pub fn bounds(&self, geometry: &Geometry, prim: PrimId) -> Aabb {
-        prim_bounds(geometry, prim, self.shutter, self.options.sphere_margin)
+        prim_bounds(geometry, prim, self.shutter, self.options.roots_margin)
     }
 }
 

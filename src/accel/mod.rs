@@ -34,7 +34,7 @@ use std::time::{Duration, Instant};
 
 use crate::intersect::{
     beyond_lanes, holds_lanes8, intervals_lanes8, BoxPack8, IntersectOptions, PacketQuery,
-    RayQuery, Rays8, SphereRoots,
+    RayQuery, Rays8,
 };
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{traceable_lanes, Hit, Ray, RayPacket};
@@ -149,11 +149,11 @@ impl Accel {
                 options.grid_density,
                 options.mailbox,
                 options.shutter,
-                options.intersect.sphere_margin,
+                options.intersect.roots_margin,
             )),
             AccelKind::Bvh => {
                 let (build, shutter) = (options.bvh, options.shutter);
-                let margin = options.intersect.sphere_margin;
+                let margin = options.intersect.roots_margin;
                 match options.bvh_width.unwrap_or(default_width(options.bvh)) {
                     BvhWidth::Two => Accel::Bvh2(Bvh2::build(geometry, build, shutter, margin)),
                     // A tree too large for the 8-wide encoding stays binary.
@@ -321,14 +321,7 @@ impl<'s> Tracer<'s> {
     /// primitives as `options.intersect` says.
     pub fn new(geometry: &'s Geometry, options: &AccelOptions) -> Self {
         let start = Instant::now();
-        // The textbook roots' spheres are padded further (`bounds::textbook_margin`).
-        let intersect = IntersectOptions {
-            sphere_margin: match options.intersect.sphere_roots {
-                SphereRoots::Precise => 0.0,
-                SphereRoots::Textbook => bounds::textbook_margin(geometry),
-            },
-            ..options.intersect
-        };
+        let intersect = bounds::with_margins(options.intersect, geometry);
         let accel = Accel::build(
             geometry,
             &AccelOptions {
@@ -397,7 +390,7 @@ impl<'s> Tracer<'s> {
         let bounded = closest.hit();
         // Planes come last in id order, so a plane at the same `t` loses the tie.
         let t_max = bounded.map_or(t_max, |h| h.t);
-        self.closest_plane(&query, t_max, count).or(bounded)
+        self.closest_unbounded(&query, t_max, count).or(bounded)
     }
 
     /// Whether anything blocks the ray within `(t_min, t_max)`.
@@ -516,7 +509,7 @@ impl<'s> Tracer<'s> {
             return false;
         }
         let query = RayQuery::new(ray, t_min, self.options);
-        self.blocking_plane(&query, t_max, count)
+        self.blocking_unbounded(&query, t_max, count)
             || self.accel.occluded(self.geometry, &query, t_max, count)
     }
 
@@ -549,8 +542,9 @@ impl<'s> Tracer<'s> {
             return std::array::from_fn(|k| bounded[k].filter(|_| active.has(k)));
         }
         // As `closest` for each lane: a plane must be closer than the structure's hit.
-        let planes = self.closest_planes(&query, active, closest.map(|c| c.limit()), count);
-        std::array::from_fn(|k| active.has(k).then(|| planes[k].or(bounded[k])).flatten())
+        let unbounded =
+            self.closest_unbounded_lanes(&query, active, closest.map(|c| c.limit()), count);
+        std::array::from_fn(|k| active.has(k).then(|| unbounded[k].or(bounded[k])).flatten())
     }
 
     /// The active lanes of `packet` whose ray is blocked within its interval, as a bit
@@ -570,27 +564,27 @@ impl<'s> Tracer<'s> {
         count.rays(packet.active);
         let active = packet.active & packet.traceable();
         let options = self.options;
-        let by_plane = if self.has_unbounded() {
+        let by_unbounded = if self.has_unbounded() {
             let shear = OnceCell::new();
-            self.blocking_planes(&PacketQuery::new(packet, options, &shear), active, count)
+            self.blocking_unbounded_lanes(&PacketQuery::new(packet, options, &shear), active, count)
         } else {
             0
         };
         let mut rest = None;
-        let packet = packet.asking(active & !by_plane, &mut rest);
+        let packet = packet.asking(active & !by_unbounded, &mut rest);
         let shear = OnceCell::new();
         let query = PacketQuery::new(packet, options, &shear);
-        by_plane
+        by_unbounded
             | self
                 .accel
                 .occluded_packet::<C>(self.geometry, &query, count)
     }
 
-    /// [`Tracer::closest_plane`] for the lanes `lanes` of `query`'s packet, each within
+    /// [`Tracer::closest_unbounded`] for the lanes `lanes` of `query`'s packet, each within
     /// `(t_min, t_max[k])`: each plane against the packet's rays at once by its packet
     /// kernel, which answers each lane as the scalar test does
     /// (`tests/integration/simd.rs`).
-    fn closest_planes<C>(
+    fn closest_unbounded_lanes<C>(
         &self,
         query: &PacketQuery,
         lanes: LaneBits,
@@ -608,9 +602,9 @@ impl<'s> Tracer<'s> {
     }
 
     /// The lanes `lanes` of `query`'s packet that an unbounded primitive (a plane) blocks
-    /// within their interval: those in which [`Tracer::closest_planes`] finds a hit,
+    /// within their interval: those in which [`Tracer::closest_unbounded_lanes`] finds a hit,
     /// found without keeping the closest (a lane is done at its first plane hit).
-    fn blocking_planes<C>(
+    fn blocking_unbounded_lanes<C>(
         &self,
         query: &PacketQuery,
         lanes: LaneBits,
@@ -632,8 +626,8 @@ impl<'s> Tracer<'s> {
     }
 
     /// Whether an unbounded primitive (a plane) blocks `query` within `(t_min, t_max)`:
-    /// whether [`Tracer::closest_plane`] finds a hit, found without keeping the closest.
-    fn blocking_plane(&self, query: &RayQuery, t_max: f32, count: &mut impl Count) -> bool {
+    /// whether [`Tracer::closest_unbounded`] finds a hit, found without keeping the closest.
+    fn blocking_unbounded(&self, query: &RayQuery, t_max: f32, count: &mut impl Count) -> bool {
         let mut blocked = false;
         for kind in PrimKind::UNBOUNDED {
             count.prims(self.geometry.count(kind) as u32);
@@ -653,7 +647,12 @@ impl<'s> Tracer<'s> {
     }
 
     /// The closest hit among the unbounded primitives (planes), which no structure holds.
-    fn closest_plane(&self, query: &RayQuery, t_max: f32, count: &mut impl Count) -> Option<Hit> {
+    fn closest_unbounded(
+        &self,
+        query: &RayQuery,
+        t_max: f32,
+        count: &mut impl Count,
+    ) -> Option<Hit> {
         let mut closest = ClosestHit::new(t_max);
         for kind in PrimKind::UNBOUNDED {
             count.prims(self.geometry.count(kind) as u32);

@@ -205,7 +205,7 @@ pub trait Shapes {
     }
 
     /// Whether the structures grow this kind's boxes by the margin of the profile's sphere
-    /// roots ([`IntersectOptions::sphere_margin`], `accel::bounds`).
+    /// roots ([`IntersectOptions::roots_margin`], `accel::bounds`).
     const ROOTS_MARGIN: bool = false;
 
     /// Whether the primitives move over the shutter (their boxes cover the whole of it).
@@ -303,12 +303,13 @@ pub struct Hits8 {
 /// What a profile chooses in an intersection: the form of the sphere test's quadratic.
 /// Chosen where the tracer is built and handed to the kernels with each query (as
 /// Embree's per-query context), never kept with the geometry. With it goes how much
-/// further than rounding the structures pad a sphere's box (`accel::bounds`), which the
-/// tracer sets from the scene for the textbook roots.
+/// further than rounding the structures pad the box of a kind whose roots it chooses
+/// (`accel::bounds`, `Shapes::ROOTS_MARGIN`), which the tracer sets from the scene for
+/// the textbook roots.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct IntersectOptions {
     pub sphere_roots: SphereRoots,
-    pub sphere_margin: f32,
+    pub roots_margin: f32,
 }
 
 /// A kind whose primitives the 8-wide BVH stores side by side (`packed` in

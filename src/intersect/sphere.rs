@@ -316,7 +316,7 @@ pub(super) fn trusted_sphere_box(
     radius: f32,
     options: IntersectOptions,
 ) -> Option<Aabb> {
-    trusted_box(sphere_bounds(centre, radius), options.sphere_margin)
+    trusted_box(sphere_bounds(centre, radius), options.roots_margin)
 }
 
 /// [`trusted_sphere_box`] of eight spheres, with the lanes where it is `Some`.
@@ -331,7 +331,7 @@ fn trusted_sphere_boxes8(
         min: centre - reach,
         max: centre + reach,
     };
-    tight.trusted(options.sphere_margin)
+    tight.trusted(options.roots_margin)
 }
 
 /// [`Shapes::surface_point`] of a sphere. The hit's offset from the centre is taken as

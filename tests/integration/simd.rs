@@ -509,7 +509,7 @@ proptest! {
         p in packet(),
         spheres in prop::collection::vec((point(), radius()), 0..=8),
         roots in roots(),
-        sphere_margin in prop_oneof![Just(0.0f32), 0.0f32..4.0],
+        roots_margin in prop_oneof![Just(0.0f32), 0.0f32..4.0],
     ) {
         let mut storage = Spheres::default();
         for (centre, r) in spheres {
@@ -517,7 +517,7 @@ proptest! {
         }
         let options = IntersectOptions {
             sphere_roots: roots,
-            sphere_margin,
+            roots_margin,
         };
         pack_equals_scalar("sphere pack", &storage, &ray, limits, &p, options);
     }
@@ -649,13 +649,13 @@ proptest! {
         t_min in prop::sample::select(vec![0.0f32, 1e-4]),
         t_max in prop::array::uniform8(prop_oneof![Just(INF), 0.0f32..12.0, Just(NAN)]),
         roots in roots(),
-        sphere_margin in prop_oneof![Just(0.0f32), 0.0f32..4.0],
+        roots_margin in prop_oneof![Just(0.0f32), 0.0f32..4.0],
     ) {
         let mut storage = Spheres::default();
         for &(centre, r) in &spheres {
             storage.push(centre, r, 0);
         }
-        let options = IntersectOptions { sphere_roots: roots, sphere_margin };
+        let options = IntersectOptions { sphere_roots: roots, roots_margin };
         let indices = order.map(|i| i % spheres.len());
         let lanes = Rays8 {
             origin: Vec3x8::from_fn(|k| rays[k].origin),

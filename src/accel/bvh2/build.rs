@@ -114,17 +114,17 @@ const UNUSED: Node = Node {
 
 /// The nodes, depth first, and the primitives in leaf order, over every bounded
 /// primitive of `geometry` whose box (moving spheres over `shutter`, spheres grown by
-/// `sphere_margin`) is not empty.
+/// `roots_margin`) is not empty.
 pub(super) fn build(
     geometry: &Geometry,
     rules: Rules,
     shutter: [f32; 2],
-    sphere_margin: f32,
+    roots_margin: f32,
 ) -> (Vec<Node>, Vec<PrimId>) {
     let mut items = Vec::with_capacity(geometry.bounded_count());
     for kind in PrimKind::BOUNDED {
         for prim in geometry.ids(kind) {
-            let bounds = prim_bounds(geometry, prim, shutter, sphere_margin);
+            let bounds = prim_bounds(geometry, prim, shutter, roots_margin);
             if !bounds.is_empty() {
                 items.push(Item { bounds, prim });
             }

@@ -139,14 +139,14 @@ impl Bvh2Stats {
 
 impl Bvh2 {
     /// The tree over every bounded primitive of `geometry`, moving spheres bounded over
-    /// `shutter`, spheres' boxes grown by `sphere_margin` (`bounds::prim_bounds`).
+    /// `shutter`, spheres' boxes grown by `roots_margin` (`bounds::prim_bounds`).
     pub fn build(
         geometry: &Geometry,
         build: BvhBuild,
         shutter: [f32; 2],
-        sphere_margin: f32,
+        roots_margin: f32,
     ) -> Bvh2 {
-        Self::build_for_packs(geometry, build, shutter, sphere_margin, 0)
+        Self::build_for_packs(geometry, build, shutter, roots_margin, 0)
     }
 
     /// [`Bvh2::build`] for a tree to be collapsed into packs of up to `pack_size`
@@ -156,14 +156,14 @@ impl Bvh2 {
         geometry: &Geometry,
         build: BvhBuild,
         shutter: [f32; 2],
-        sphere_margin: f32,
+        roots_margin: f32,
         pack_size: usize,
     ) -> Bvh2 {
         let rules = build::Rules {
             build,
             pack_leaves: pack_size,
         };
-        let (nodes, prims) = build::build(geometry, rules, shutter, sphere_margin);
+        let (nodes, prims) = build::build(geometry, rules, shutter, roots_margin);
         Bvh2 {
             nodes,
             prims,

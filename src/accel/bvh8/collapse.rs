@@ -25,9 +25,9 @@ impl Bvh8 {
         geometry: &Geometry,
         build: BvhBuild,
         shutter: [f32; 2],
-        sphere_margin: f32,
+        roots_margin: f32,
     ) -> Result<Bvh8, Bvh2> {
-        let bvh2 = Bvh2::build_for_packs(geometry, build, shutter, sphere_margin, PACK);
+        let bvh2 = Bvh2::build_for_packs(geometry, build, shutter, roots_margin, PACK);
         Self::collapse(bvh2, geometry)
     }
 
