@@ -11,10 +11,9 @@ const CELLS: [u32; 2] = [2500, 2000];
 const TRIANGLES: usize = 10_000_000;
 
 /// The most heap a triangle may take at the peak of storing, building the default BVH and
-/// rendering (144.0 measured, `docs/limits.md`: at the end of the binary build, 44 for the
-/// triangle records, 4 for the primitive order, and the binary nodes at 64 and 32 bytes as
-/// they shrink to the nodes the tree uses; once built, 140.7: the records, the order and
-/// 93 for the 8-wide tree, its packs with their trusted boxes).
+/// rendering (142.6 measured, `docs/limits.md`: at the end of the collapse, 44 for the
+/// triangle records, 4 for the primitive order, 93 for the 8-wide tree, its packs with
+/// their trusted boxes, and 2 for the list of packs to fill; 140.7 held once built).
 const MAX_BYTES_PER_TRIANGLE: f64 = 150.0;
 
 /// A gentle landscape, so that the SAH has shapes to split.
