@@ -1,6 +1,6 @@
 //! The two builds of the binary BVH: the course report's midpoint split and the binned
-//! SAH. Both write nodes depth first into one array, allocated once, and reorder the
-//! primitives so that each leaf's are contiguous.
+//! SAH. Both write nodes depth first, a large subtree's halves on two threads, and reorder
+//! the primitives so that each leaf's are contiguous.
 
 use glam::{Vec3, Vec3A};
 
@@ -130,27 +130,92 @@ pub(super) fn build(
             }
         }
     }
-    // A tree of n primitives has at most 2n - 1 nodes: the array is allocated once, at
-    // that size, and never grows (growing it copied it at twice its size, the peak of
-    // `tests/memory/huge_scene.rs`).
-    let mut nodes = vec![UNUSED; (2 * items.len()).saturating_sub(1)];
-    if !items.is_empty() {
-        let boxes = Boxes::of(&items);
-        let used = grow(&mut nodes, 0, &mut items, boxes, 0, 0, rules);
-        nodes.truncate(used);
-    }
+    let nodes = match items.is_empty() {
+        true => Vec::new(),
+        false => {
+            let boxes = Boxes::of(&items);
+            grow(&mut items, boxes, 0, 0, rules)
+        }
+    };
     let prims = items.iter().map(|it| it.prim).collect();
-    // The items go before the nodes shrink to what is used, so both are never held at once.
-    drop(items);
-    nodes.shrink_to_fit();
     (nodes, prims)
 }
 
-/// Builds the subtree over `items` (which start at `offset` in the final primitive
-/// order, and whose boxes are `boxes`) at the start of `nodes`, whose first node is
-/// `base` in the whole array, depth first; returns the number of nodes it took. `nodes`
-/// holds at least `2 items.len() - 1`.
-fn grow(
+/// A node over `bounds` that is a leaf of `count` primitives from `offset`, until a split
+/// makes it interior.
+fn leaf(bounds: &Aabb, offset: usize, count: usize) -> Node {
+    Node {
+        min: bounds.min.to_array(),
+        offset: offset as u32,
+        max: bounds.max.to_array(),
+        count: count as u32,
+    }
+}
+
+/// How the node over `items` (with boxes `boxes`, at `depth`) splits, or `None` for a leaf.
+fn split_of(items: &mut [Item], boxes: &Boxes, depth: usize, rules: Rules) -> Option<Split> {
+    let leaf_size = match rules.build {
+        BvhBuild::Midpoint => MIDPOINT_LEAF,
+        BvhBuild::Sah => MAX_LEAF,
+    };
+    if rules.is_pack_leaf(items) {
+        None
+    } else if depth >= FREE_DEPTH {
+        median_split(items, &boxes.centroids, leaf_size).map(|k| Split::at(items, k))
+    } else {
+        match rules.build {
+            BvhBuild::Midpoint => midpoint_split(items, &boxes.bounds).map(|k| Split::at(items, k)),
+            BvhBuild::Sah => sah_split(items, boxes),
+        }
+    }
+}
+
+/// The subtree over `items` (which start at `offset` in the final primitive order, and
+/// whose boxes are `boxes`), depth first, its root first, its interior nodes' children
+/// counted from its root. A large subtree's two halves are built on two threads, each
+/// into an array of its own, and copied after their root: the nodes are held at most
+/// twice, at the nodes used, not at the most a tree can take (2n - 1).
+fn grow(items: &mut [Item], boxes: Boxes, offset: usize, depth: usize, rules: Rules) -> Vec<Node> {
+    if items.len() <= PARALLEL_BUILD {
+        // At most 2n - 1 nodes, for a small n.
+        let mut nodes = vec![UNUSED; 2 * items.len() - 1];
+        let used = grow_in(&mut nodes, 0, items, boxes, offset, depth, rules);
+        nodes.truncate(used);
+        nodes.shrink_to_fit();
+        return nodes;
+    }
+    let root = leaf(&boxes.bounds, offset, items.len());
+    let Some(split) = split_of(items, &boxes, depth, rules) else {
+        return vec![root];
+    };
+    let k = split.k;
+    let (left, right) = items.split_at_mut(k);
+    let (left, right) = rayon::join(
+        || grow(left, split.left, offset, depth + 1, rules),
+        || grow(right, split.right, offset + k, depth + 1, rules),
+    );
+    let right_start = 1 + left.len();
+    let mut nodes = Vec::with_capacity(right_start + right.len());
+    nodes.push(Node {
+        offset: right_start as u32,
+        count: 0,
+        ..root
+    });
+    for (subtree, shift) in [(left, 1), (right, right_start)] {
+        nodes.extend(subtree.into_iter().map(|node| match node.count {
+            0 => Node {
+                offset: node.offset + shift as u32,
+                ..node
+            },
+            _ => node,
+        }));
+    }
+    nodes
+}
+
+/// [`grow`] on one thread, into `nodes`, whose first node is `base` in the subtree's
+/// array: returns the number of nodes it took. `nodes` holds at least `2 items.len() - 1`.
+fn grow_in(
     nodes: &mut [Node],
     base: usize,
     items: &mut [Item],
@@ -159,62 +224,33 @@ fn grow(
     depth: usize,
     rules: Rules,
 ) -> usize {
-    let bounds = boxes.bounds;
-    nodes[0] = Node {
-        min: bounds.min.to_array(),
-        offset: offset as u32,
-        max: bounds.max.to_array(),
-        count: items.len() as u32,
-    };
-    let leaf_size = match rules.build {
-        BvhBuild::Midpoint => MIDPOINT_LEAF,
-        BvhBuild::Sah => MAX_LEAF,
-    };
-    let split = if rules.is_pack_leaf(items) {
-        None
-    } else if depth >= FREE_DEPTH {
-        median_split(items, &boxes.centroids, leaf_size).map(|k| Split::at(items, k))
-    } else {
-        match rules.build {
-            BvhBuild::Midpoint => midpoint_split(items, &bounds).map(|k| Split::at(items, k)),
-            BvhBuild::Sah => sah_split(items, &boxes),
-        }
-    };
-    let Some(split) = split else {
+    nodes[0] = leaf(&boxes.bounds, offset, items.len());
+    let Some(split) = split_of(items, &boxes, depth, rules) else {
         return 1;
     };
     let k = split.k;
     let (left, right) = items.split_at_mut(k);
-    let child = |nodes: &mut [Node], base, items: &mut [Item], boxes, offset| {
-        grow(nodes, base, items, boxes, offset, depth + 1, rules)
-    };
-    let (left_used, right_used) = if left.len() + right.len() > PARALLEL_BUILD {
-        // The two subtrees on two threads, the right one after the most room the left
-        // one can take (2k - 1 nodes), then moved down to follow it: the same array as
-        // one thread builds.
-        let room = 2 * k - 1;
-        let (left_nodes, right_nodes) = nodes[1..].split_at_mut(room);
-        let right_base = base + 1 + room;
-        let (left_used, right_used) = rayon::join(
-            || child(left_nodes, base + 1, left, split.left, offset),
-            || child(right_nodes, right_base, right, split.right, offset + k),
-        );
-        let (from, shift) = (1 + room, room - left_used);
-        for node in &mut nodes[from..from + right_used] {
-            if node.count == 0 {
-                node.offset -= shift as u32;
-            }
-        }
-        nodes.copy_within(from..from + right_used, 1 + left_used);
-        (left_used, right_used)
-    } else {
-        let left_used = child(&mut nodes[1..], base + 1, left, split.left, offset);
-        let right_nodes = &mut nodes[1 + left_used..];
-        let right_base = base + 1 + left_used;
-        let right_used = child(right_nodes, right_base, right, split.right, offset + k);
-        (left_used, right_used)
-    };
-    nodes[0].offset = (base + 1 + left_used) as u32;
+    let left_used = grow_in(
+        &mut nodes[1..],
+        base + 1,
+        left,
+        split.left,
+        offset,
+        depth + 1,
+        rules,
+    );
+    let right_base = base + 1 + left_used;
+    let right_nodes = &mut nodes[1 + left_used..];
+    let right_used = grow_in(
+        right_nodes,
+        right_base,
+        right,
+        split.right,
+        offset + k,
+        depth + 1,
+        rules,
+    );
+    nodes[0].offset = right_base as u32;
     nodes[0].count = 0;
     1 + left_used + right_used
 }
