@@ -8,7 +8,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
 use p3trace::intersect::{
-    self, BoxPack8, BoxRay, BoxRays, IntersectOptions, PacketQuery, SpherePack8, SphereRoots,
+    self, BoxPack8, BoxRay, BoxRays, IntersectOptions, PacketQuery, Roots, SpherePack8,
     TrianglePack8,
 };
 use p3trace::ray::{Ray, RayPacket};
@@ -99,7 +99,7 @@ fn packets(c: &mut Criterion) {
                 black_box(&packet),
                 Vec3::ZERO,
                 1.0,
-                SphereRoots::Precise,
+                Roots::Precise,
                 lo,
                 hi,
                 all,
@@ -153,15 +153,7 @@ fn leaves(c: &mut Criterion) {
     let inf = f32::INFINITY;
 
     c.bench_function("leaf/sphere/simd", |b| {
-        b.iter(|| {
-            intersect::sphere_leaf(
-                black_box(&ray),
-                &sphere_pack,
-                SphereRoots::Precise,
-                0.0,
-                inf,
-            )
-        })
+        b.iter(|| intersect::sphere_leaf(black_box(&ray), &sphere_pack, Roots::Precise, 0.0, inf))
     });
     c.bench_function("leaf/sphere/scalar x8", |b| {
         b.iter(|| {

@@ -23,7 +23,7 @@
 //! render ([`textbook_margin`]), which keeps the course renderer's images, and the rule for
 //! every other ray.
 
-use crate::intersect::{gamma, trusted_box, Aabb, IntersectOptions, SphereRoots};
+use crate::intersect::{gamma, trusted_box, Aabb, IntersectOptions, Roots};
 use crate::prim::{PrimId, PrimKind};
 use crate::scene::Geometry;
 
@@ -48,9 +48,9 @@ pub fn prim_bounds(
 /// roots' spheres are padded further ([`textbook_margin`]).
 pub fn with_margins(options: IntersectOptions, geometry: &Geometry) -> IntersectOptions {
     IntersectOptions {
-        roots_margin: match options.sphere_roots {
-            SphereRoots::Precise => 0.0,
-            SphereRoots::Textbook => textbook_margin(geometry),
+        roots_margin: match options.roots {
+            Roots::Precise => 0.0,
+            Roots::Textbook => textbook_margin(geometry),
         },
         ..options
     }

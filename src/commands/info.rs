@@ -83,7 +83,7 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode, Failure> {
     let options = AccelOptions {
         shutter: RenderOptions::from_scene(rendered).shutter,
         intersect: IntersectOptions {
-            sphere_roots: args.profile.sphere_roots(),
+            roots: args.profile.roots(),
             ..IntersectOptions::default()
         },
         ..args.accel.options(rendered.accel)

@@ -66,7 +66,7 @@ pub use interval::{
 pub use moving_sphere::MovingSpheres;
 pub use plane::{plane, plane_packet, Planes};
 pub use sphere::{
-    sphere, sphere_leaf, sphere_packet, sphere_textbook, Sphere, SpherePack8, SphereRoots, Spheres,
+    sphere, sphere_leaf, sphere_packet, sphere_textbook, Roots, Sphere, SpherePack8, Spheres,
     MIN_RADIUS,
 };
 pub use triangle::{
@@ -308,7 +308,7 @@ pub struct Hits8 {
 /// the textbook roots.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct IntersectOptions {
-    pub sphere_roots: SphereRoots,
+    pub roots: Roots,
     pub roots_margin: f32,
 }
 

@@ -1,6 +1,6 @@
 //! The sphere kind: its storage ([`Spheres`]), the ray-sphere test and its SIMD twins (a
 //! packet's rays against one sphere; one ray against a [`SpherePack8`] of a BVH leaf),
-//! each in two forms of the quadratic ([`SphereRoots`]).
+//! each in two forms of the quadratic ([`Roots`]).
 
 use glam::{DVec3, Vec3};
 
@@ -17,7 +17,7 @@ use crate::simd::{
 
 /// How the sphere test solves its quadratic.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum SphereRoots {
+pub enum Roots {
     /// The discriminant from the perpendicular distance and the near root as `c / q`
     /// ([`sphere`]): precise for small spheres seen from afar and large ones from close by.
     #[default]
@@ -119,17 +119,17 @@ pub fn sphere_packet(
     rays: &RayPacket,
     centre: Vec3,
     radius: f32,
-    roots: SphereRoots,
+    roots: Roots,
     t_min: F32xP,
     t_max: F32xP,
     active: LaneBits,
 ) -> (MaskP, F32xP) {
     let (centre, radius) = (Vec3xP::splat(centre), F32xP::splat(radius));
     let (hit, t) = match roots {
-        SphereRoots::Precise => {
+        Roots::Precise => {
             sphere_lanes::<_, false>(rays.origin, rays.dir, centre, radius, t_min, t_max)
         }
-        SphereRoots::Textbook => {
+        Roots::Textbook => {
             sphere_lanes::<_, true>(rays.origin, rays.dir, centre, radius, t_min, t_max)
         }
     };
@@ -143,17 +143,17 @@ pub fn sphere_packet(
 pub fn sphere_leaf(
     ray: &Ray,
     pack: &SpherePack8,
-    roots: SphereRoots,
+    roots: Roots,
     t_min: f32,
     t_max: f32,
 ) -> (Mask8, F32x8) {
     let (origin, dir) = (Vec3x8::splat(ray.origin), Vec3x8::splat(ray.dir));
     let (t_min, t_max) = (F32x8::splat(t_min), F32x8::splat(t_max));
     match roots {
-        SphereRoots::Precise => {
+        Roots::Precise => {
             sphere_lanes::<_, false>(origin, dir, pack.centre, pack.radius, t_min, t_max)
         }
-        SphereRoots::Textbook => {
+        Roots::Textbook => {
             sphere_lanes::<_, true>(origin, dir, pack.centre, pack.radius, t_min, t_max)
         }
     }
@@ -232,13 +232,9 @@ fn spheres_lanes8(
     options: IntersectOptions,
 ) -> (Mask8, F32x8) {
     let lanes_min = F32x8::splat(t_min);
-    let (hit, t) = match options.sphere_roots {
-        SphereRoots::Precise => {
-            sphere_lanes::<_, false>(origin, dir, centre, radius, lanes_min, t_max)
-        }
-        SphereRoots::Textbook => {
-            sphere_lanes::<_, true>(origin, dir, centre, radius, lanes_min, t_max)
-        }
+    let (hit, t) = match options.roots {
+        Roots::Precise => sphere_lanes::<_, false>(origin, dir, centre, radius, lanes_min, t_max),
+        Roots::Textbook => sphere_lanes::<_, true>(origin, dir, centre, radius, lanes_min, t_max),
     };
     if hit.none() {
         return (hit, t);
@@ -263,7 +259,7 @@ impl LeafPack for Spheres {
     /// The kernel's hits that lie in their sphere's trusted box (as [`Shapes::intersect`]).
     #[inline(always)]
     fn leaf<const FRAME: usize>(pack: &SpherePack8, query: &RayQuery, t_max: f32) -> ShapeHit8 {
-        let roots = query.options.sphere_roots;
+        let roots = query.options.roots;
         let (hit, t) = sphere_leaf(&query.ray, pack, roots, query.t_min, t_max);
         if hit.none() {
             return ShapeHit8::at((hit, t));
@@ -295,11 +291,7 @@ fn sphere_in_packet(
     t_max: F32xP,
     active: LaneBits,
 ) -> PacketHits {
-    let (rays, roots, t_min) = (
-        query.packet,
-        query.options.sphere_roots,
-        query.t_min_lanes(),
-    );
+    let (rays, roots, t_min) = (query.packet, query.options.roots, query.t_min_lanes());
     let (hit, t) = sphere_packet(rays, centre, radius, roots, t_min, t_max, active);
     if hit.none() {
         return PacketHits::at((hit, t));
@@ -394,9 +386,9 @@ impl Shapes for Spheres {
     fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<ShapeHit> {
         let (ray, t_min) = (&query.ray, query.t_min);
         let Sphere { centre, radius, .. } = self.records[i];
-        match query.options.sphere_roots {
-            SphereRoots::Precise => sphere(ray, centre, radius, t_min, t_max),
-            SphereRoots::Textbook => sphere_textbook(ray, centre, radius, t_min, t_max),
+        match query.options.roots {
+            Roots::Precise => sphere(ray, centre, radius, t_min, t_max),
+            Roots::Textbook => sphere_textbook(ray, centre, radius, t_min, t_max),
         }
         .filter(|&t| query.holds(trusted_sphere_box(centre, radius, query.options), t))
         .map(ShapeHit::at)

@@ -308,7 +308,7 @@ impl<'s> Stage<'s> {
         let accel_options = AccelOptions {
             shutter: options.shutter,
             intersect: IntersectOptions {
-                sphere_roots: options.shade.profile.sphere_roots(),
+                roots: options.shade.profile.roots(),
                 ..IntersectOptions::default()
             },
             ..options.accel

@@ -23,7 +23,7 @@ use super::sampler::{dim, Sample, SampleGrid, SampleRng};
 use super::skybox::Skybox;
 use crate::accel::count::{Count, RayCounts, RayKind, Work};
 use crate::accel::{InsideAnswers, Tracer};
-use crate::intersect::{spawn_origin, Hits8, Rays8, SphereRoots, SurfacePoint, SurfacePoint8};
+use crate::intersect::{spawn_origin, Hits8, Rays8, Roots, SurfacePoint, SurfacePoint8};
 use crate::prim::PrimKind;
 use crate::ray::{Hit, Ray};
 use crate::scene::{Frame, Material, Scene};
@@ -69,10 +69,10 @@ impl Profile {
 
     /// How spheres are tested: the course's renderer solved the textbook quadratic in
     /// single precision, whose error on the smallest spheres its images show.
-    pub fn sphere_roots(self) -> SphereRoots {
+    pub fn roots(self) -> Roots {
         match self {
-            Profile::Standard => SphereRoots::Precise,
-            Profile::Course => SphereRoots::Textbook,
+            Profile::Standard => Roots::Precise,
+            Profile::Course => Roots::Textbook,
         }
     }
 

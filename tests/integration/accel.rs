@@ -10,7 +10,7 @@ use p3trace::accel::count::{LaneTallies, NoCount, Tally};
 use p3trace::accel::stream::{self, Occlusions};
 use p3trace::accel::{AccelKind, AccelOptions, Tracer};
 use p3trace::accel::{BvhBuild, BvhWidth};
-use p3trace::intersect::{self, IntersectOptions, Rays8, SphereRoots};
+use p3trace::intersect::{self, IntersectOptions, Rays8, Roots};
 use p3trace::prim::{PrimId, PrimKind};
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::{render, RenderOptions};
@@ -418,9 +418,9 @@ proptest! {
             let origin = sphere_rec.centre + depth[k] * sphere_rec.radius * towards[k];
             Ray::new(origin, dirs[k])
         });
-        let roots = if textbook { SphereRoots::Textbook } else { SphereRoots::Precise };
+        let roots = if textbook { Roots::Textbook } else { Roots::Precise };
         let options = AccelOptions {
-            intersect: IntersectOptions { sphere_roots: roots, ..Default::default() },
+            intersect: IntersectOptions { roots, ..Default::default() },
             ..AccelOptions::brute_force()
         };
         let brute = Tracer::new(g, &options).with_rooms(|_| true);
@@ -602,15 +602,13 @@ fn the_tracers_sphere_roots_reach_every_kernel() {
     let ray = Ray::new(Vec3::new(0.153, 0.004, 50.0), Vec3::NEG_Z);
     let centre = Vec3::new(0.15, 0.0, 0.0);
     let mut distances = Vec::new();
-    for roots in [SphereRoots::Precise, SphereRoots::Textbook] {
+    for roots in [Roots::Precise, Roots::Textbook] {
         let expected = match roots {
-            SphereRoots::Precise => intersect::sphere(&ray, centre, 0.01, 0.0, f32::INFINITY),
-            SphereRoots::Textbook => {
-                intersect::sphere_textbook(&ray, centre, 0.01, 0.0, f32::INFINITY)
-            }
+            Roots::Precise => intersect::sphere(&ray, centre, 0.01, 0.0, f32::INFINITY),
+            Roots::Textbook => intersect::sphere_textbook(&ray, centre, 0.01, 0.0, f32::INFINITY),
         };
         let intersect = IntersectOptions {
-            sphere_roots: roots,
+            roots,
             ..IntersectOptions::default()
         };
         for options in structures()

@@ -10,8 +10,8 @@ use std::cell::OnceCell;
 use glam::{Vec2, Vec3};
 use p3trace::intersect::{
     self, Aabb, BoxPack8, BoxRay, BoxRays, Boxes, Hits8, IntersectOptions, Intervals, LeafPack,
-    PacketQuery, RayQuery, Rays8, ShapeHit, ShapeHits, Shapes, Shear, ShearLanes, SpherePack8,
-    SphereRoots, Spheres, SurfacePoint, SurfacePoint8, TrianglePack8, Triangles,
+    PacketQuery, RayQuery, Rays8, Roots, ShapeHit, ShapeHits, Shapes, Shear, ShearLanes,
+    SpherePack8, Spheres, SurfacePoint, SurfacePoint8, TrianglePack8, Triangles,
 };
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::camera::{Camera, FilmSample};
@@ -335,15 +335,15 @@ fn same_hit<F: Floats>(what: &str, lane: usize, expected: Option<ShapeHit>, hits
 }
 
 /// Both forms of the sphere's quadratic.
-fn roots() -> impl Strategy<Value = SphereRoots> {
-    prop_oneof![Just(SphereRoots::Precise), Just(SphereRoots::Textbook)]
+fn roots() -> impl Strategy<Value = Roots> {
+    prop_oneof![Just(Roots::Precise), Just(Roots::Textbook)]
 }
 
 /// The scalar sphere test of `roots`: the twin of the kernels.
-fn scalar_sphere(roots: SphereRoots, ray: &Ray, c: Vec3, r: f32, lo: f32, hi: f32) -> Option<f32> {
+fn scalar_sphere(roots: Roots, ray: &Ray, c: Vec3, r: f32, lo: f32, hi: f32) -> Option<f32> {
     match roots {
-        SphereRoots::Precise => intersect::sphere(ray, c, r, lo, hi),
-        SphereRoots::Textbook => intersect::sphere_textbook(ray, c, r, lo, hi),
+        Roots::Precise => intersect::sphere(ray, c, r, lo, hi),
+        Roots::Textbook => intersect::sphere_textbook(ray, c, r, lo, hi),
     }
 }
 
@@ -516,7 +516,7 @@ proptest! {
             storage.push(centre, r, 0);
         }
         let options = IntersectOptions {
-            sphere_roots: roots,
+            roots,
             roots_margin,
         };
         pack_equals_scalar("sphere pack", &storage, &ray, limits, &p, options);
@@ -655,7 +655,7 @@ proptest! {
         for &(centre, r) in &spheres {
             storage.push(centre, r, 0);
         }
-        let options = IntersectOptions { sphere_roots: roots, roots_margin };
+        let options = IntersectOptions { roots, roots_margin };
         let indices = order.map(|i| i % spheres.len());
         let lanes = Rays8 {
             origin: Vec3x8::from_fn(|k| rays[k].origin),
@@ -809,7 +809,7 @@ proptest! {
     #[test]
     fn padding_is_inert(ray in ray(), (t_min, t_max) in interval()) {
         let inv_dir = ray.dir.recip();
-        let spheres = intersect::sphere_leaf(&ray, &SpherePack8::new(&[]), SphereRoots::Precise, t_min, t_max).0;
+        let spheres = intersect::sphere_leaf(&ray, &SpherePack8::new(&[]), Roots::Precise, t_min, t_max).0;
         let triangles = intersect::triangle_leaf(&ray, &TrianglePack8::new(&[]), t_min, t_max);
         let boxes = intersect::aabb_leaf(&ray, inv_dir, &BoxPack8::new(&[]), t_min, t_max).0;
         prop_assert!(spheres.none() && triangles.hit.none() && boxes.none());
