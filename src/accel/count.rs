@@ -59,11 +59,6 @@ pub trait Count: Copy + Default + std::fmt::Debug + Send + Sync + AddAssign {
     fn prims(&mut self, n: u32);
     /// A grid cell visited.
     fn cell(&mut self);
-    /// Adds `other`'s counts.
-    #[inline(always)]
-    fn add(&mut self, other: &Self) {
-        *self += *other;
-    }
 }
 
 /// A packet's counts, lane by lane: the same events as [`Count`], each for the lanes
@@ -322,7 +317,7 @@ impl CountLanes<Tally> for LaneTallies {
         self.each(lanes, |t| t.cells += 1);
     }
     fn add_lane(&mut self, k: usize, count: &Tally) {
-        self.0[k].add(count);
+        self.0[k] += *count;
     }
     fn lane(&self, k: usize) -> Tally {
         self.0[k]
@@ -366,8 +361,8 @@ impl<C: Copy + AddAssign> Work<C> {
 
     /// Adds `count` to the kind `kind`'s statistic.
     #[inline]
-    pub fn add(&mut self, kind: RayKind, count: impl Tallied<C>) {
-        *self.of_kind(kind) += count.value();
+    pub fn add(&mut self, kind: RayKind, count: C) {
+        *self.of_kind(kind) += count;
     }
 
     pub fn merge(&mut self, other: &Work<C>) {
@@ -404,26 +399,6 @@ impl<C: Copy + AddAssign> Work<C> {
         total += self.reflection;
         total += self.refraction;
         total
-    }
-}
-
-/// What [`Work::add`] adds: a walk's [`Count`], by reference as the walks hand it on, or a
-/// number of rays for [`RayCounts`].
-pub trait Tallied<C> {
-    fn value(self) -> C;
-}
-
-impl<C: Count> Tallied<C> for &C {
-    #[inline]
-    fn value(self) -> C {
-        *self
-    }
-}
-
-impl Tallied<u64> for u64 {
-    #[inline]
-    fn value(self) -> u64 {
-        self
     }
 }
 

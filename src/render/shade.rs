@@ -187,7 +187,7 @@ impl<'a> Shader<'a> {
         let hit = self
             .tracer
             .closest_counting(ray, 0.0, f32::INFINITY, &mut own);
-        work.add(kind, &own);
+        work.add(kind, own);
         let Some(hit) = hit else {
             return self.background(ray.dir, depth);
         };
@@ -199,7 +199,7 @@ impl<'a> Shader<'a> {
             let blocked =
                 self.tracer
                     .occluded_counting(&shadow.ray, 0.0, shadow.distance, &mut count);
-            work.shadow.add(&count);
+            work.shadow += count;
             Some((shadow, blocked))
         };
         let material_index = self.tracer.geometry.material(hit.prim) as usize;

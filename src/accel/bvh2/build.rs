@@ -130,7 +130,7 @@ pub(super) fn build(
             }
         }
     }
-    let nodes = match items.is_empty() {
+    let mut nodes = match items.is_empty() {
         true => Vec::new(),
         false => {
             let boxes = Boxes::of(&items);
@@ -138,6 +138,10 @@ pub(super) fn build(
         }
     };
     let prims = items.iter().map(|it| it.prim).collect();
+    // A small tree's array was allocated at the most it could take; a large one's, at
+    // its size already.
+    drop(items);
+    nodes.shrink_to_fit();
     (nodes, prims)
 }
 
@@ -181,7 +185,6 @@ fn grow(items: &mut [Item], boxes: Boxes, offset: usize, depth: usize, rules: Ru
         let mut nodes = vec![UNUSED; 2 * items.len() - 1];
         let used = grow_in(&mut nodes, 0, items, boxes, offset, depth, rules);
         nodes.truncate(used);
-        nodes.shrink_to_fit();
         return nodes;
     }
     let root = leaf(&boxes.bounds, offset, items.len());

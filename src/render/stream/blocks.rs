@@ -302,7 +302,7 @@ impl<'a> HitBlocks<'a> {
                     let mut own = Work::default();
                     if rays.answers.answered >> k & 1 != 0 {
                         let tested = rays.answers.tested[k];
-                        own.add(rays.kind(k), &answered_work::<C>(tested));
+                        own.add(rays.kind(k), answered_work::<C>(tested));
                     }
                     work.push(own);
                 }
@@ -355,7 +355,7 @@ pub(super) fn trace_hits<'a, C: Count>(
             if C::ON {
                 for k in 0..found.len() {
                     let mut own = Work::default();
-                    own.add(kind, &lanes.lane(k));
+                    own.add(kind, lanes.lane(k));
                     work.push(own);
                 }
             }

@@ -95,9 +95,7 @@ impl<'a> ShadowQueue<'a> {
         // The work of the shadow ray tagged `tag` (its entry and lane, below).
         let mut counted = |tag: u32, count: C| {
             let block = &blocks[(tag >> 3) as usize % blocks.len()];
-            at_mut(work, block.ray[(tag & 7) as usize])
-                .shadow
-                .add(&count);
+            at_mut(work, block.ray[(tag & 7) as usize]).shadow += count;
         };
         for (index, emitter) in shader.lights.iter().enumerate() {
             colour.push(emitter.colour());
