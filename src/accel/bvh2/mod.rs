@@ -26,6 +26,7 @@ use crate::intersect::{beyond, Aabb, BoxRay, RayQuery};
 use crate::plural::count;
 use crate::prim::PrimId;
 use crate::scene::Geometry;
+pub(super) use build::several_threads;
 pub use build::MAX_LEAF;
 
 /// Which build to run.

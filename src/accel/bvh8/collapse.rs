@@ -3,20 +3,22 @@
 //! own two children while fewer than eight remain and some child is interior (Wald et
 //! al., "Getting Rid of Packets", 2008). The binary tree is consumed: its primitive order
 //! is kept, and its nodes are freed once the 8-wide nodes are made, before the packs are
-//! filled, so that the two largest arrays are never held at once. A first pass counts the
-//! 8-wide tree's nodes and packs, so that its arrays are allocated once at their size.
+//! filled, so that the two largest arrays are never held at once. On several threads a
+//! large node's subtrees are made side by side and the packs filled side by side: the
+//! same tree as on one.
 
 use std::ops::Range;
 
 use glam::Vec3;
 
 use super::leaves::{count_index, Leaves, PackCounts};
-use super::node::{leaf_ref, Node8, MAX_LEAF_PRIMS, MAX_PRIMS, RUN, WIDTH};
+use super::node::{leaf_ref, pack_code, Node8, LEAF, MAX_LEAF_PRIMS, MAX_PRIMS, RUN, WIDTH};
 use super::Bvh8;
-use crate::accel::bvh2::{Bvh2, BvhBuild, Node};
+use crate::accel::bvh2::{several_threads, Bvh2, BvhBuild, Node};
 use crate::intersect::BoxPack8;
 use crate::prim::{PrimId, PrimKind};
 use crate::scene::Geometry;
+use rayon::prelude::*;
 
 impl Bvh8 {
     /// The tree over `geometry` as [`Bvh2::build`] takes it, built binary as far as the
@@ -58,84 +60,67 @@ impl Bvh8 {
         } else {
             binary.children(&root)
         };
-        // Counted first and allocated at their size: growing them held up to twice that,
-        // and copied them, beside the binary tree at its largest
-        // (`tests/memory/huge_mesh.rs`).
-        let mut size = Size::default();
-        if !root_kids.is_empty() {
-            binary.size(root_kids.clone(), &mut size);
+        let Subtree {
+            nodes: mut wide,
+            mut packs,
+            depth,
+        } = match root_kids.is_empty() {
+            true => Subtree::default(),
+            false => binary.subtree(root_kids),
+        };
+        drop(nodes);
+        // Trimmed before the packs are allocated: trimmed beside them, the copy and the
+        // grown array held with them made the peak of `tests/memory/huge_mesh.rs`.
+        wide.shrink_to_fit();
+        packs.shrink_to_fit();
+        let mut counts = PackCounts::default();
+        for pack in &packs {
+            counts[count_index(prims[pack.start as usize].kind())] += 1;
         }
         let mut tree = Bvh8 {
-            nodes: Vec::with_capacity(size.nodes),
+            nodes: wide,
             prims: Vec::new(),
-            leaves: Leaves::with_capacity(&PackCounts::default()),
-            depth: 0,
+            leaves: Leaves::with_capacity(&counts),
+            depth,
             build,
             binary: stats,
         };
-        let mut packs = Vec::with_capacity(size.packs.iter().sum());
-        if !root_kids.is_empty() {
-            tree.depth = tree.emit(&binary, root_kids, &mut packs);
-        }
-        drop(nodes);
-        tree.leaves = Leaves::with_capacity(&size.packs);
-        for pack in packs {
-            let ids = &prims[pack.start as usize..][..pack.len as usize];
-            tree.nodes[pack.node as usize].child[pack.slot as usize] =
-                tree.leaves.push(geometry, ids);
-        }
+        tree.fill(geometry, &prims, packs);
         tree.prims = prims;
         Ok(tree)
     }
 
-    /// Appends the node over the binary nodes `start` (expanded by [`Binary::expand`])
-    /// and its subtrees, and to `packs` the packs its leaves will hold, in the order they
-    /// are to be stored; returns the subtree's depth.
-    fn emit(&mut self, binary: &Binary, start: Vec<Kid>, packs: &mut Vec<PackToFill>) -> usize {
-        let kids = binary.expand(start);
-        let index = self.nodes.len();
-        let boxes: Vec<(Vec3, Vec3)> = kids
-            .iter()
-            .map(|kid| {
-                let b = binary.nodes[kid.node].bounds();
-                (b.min, b.max)
-            })
-            .collect();
-        self.nodes.push(Node8 {
-            boxes: BoxPack8::new(&boxes),
-            child: [0; WIDTH],
-            count: kids.len() as u32,
-        });
-        let mut depth = 1;
-        for (k, kid) in kids.iter().enumerate() {
-            let child = match binary.pack_kind(kid) {
-                Some(_) => {
-                    packs.push(PackToFill {
-                        node: index as u32,
-                        slot: k as u8,
-                        len: kid.range.len() as u8,
-                        start: kid.range.start as u32,
-                    });
-                    // Until the packs are filled.
-                    0
-                }
-                None if binary.nodes[kid.node].is_leaf() => {
-                    leaf_ref(RUN, kid.range.len(), kid.range.start)
-                }
-                None => {
-                    let child = self.nodes.len() as u32;
-                    depth = depth.max(1 + self.emit(binary, binary.children(kid), packs));
-                    child
-                }
-            };
-            self.nodes[index].child[k] = child;
+    /// Fills the packs `packs` over `prims`, each kind's in the order they come (on
+    /// rayon's threads), and points their nodes' children at them.
+    fn fill(&mut self, geometry: &Geometry, prims: &[PrimId], mut packs: Vec<PackToFill>) {
+        let ids = |pack: &PackToFill| &prims[pack.start as usize..][..pack.len as usize];
+        let kind_of = |pack: &PackToFill| prims[pack.start as usize].kind();
+        // Each kind's packs side by side, in the order of `PrimKind::PACKED`, and still in
+        // their order within a kind (a scene of one packed kind has them so: no sort's
+        // scratch beside them).
+        if !packs.is_sorted_by_key(|pack| count_index(kind_of(pack))) {
+            packs.sort_by_key(|pack| count_index(kind_of(pack)));
         }
-        depth
+        let mut rest = &packs[..];
+        for kind in PrimKind::PACKED {
+            let (these, after) = rest.split_at(rest.partition_point(|p| kind_of(p) == kind));
+            let first = self
+                .leaves
+                .extend(geometry, kind, these.len(), |i| ids(&these[i]));
+            for (i, pack) in these.iter().enumerate() {
+                self.nodes[pack.node as usize].child[pack.slot as usize] =
+                    leaf_ref(pack_code(kind), pack.len as usize, first + i);
+            }
+            rest = after;
+        }
     }
 }
 
 /// The most primitives of one kind stored side by side in a leaf.
 const PACK: usize = 8;
+
+/// Nodes over more primitives than this make their children's subtrees on rayon's threads.
+const PARALLEL_COLLAPSE: usize = 4096;
 
 /// A pack to fill once the binary nodes are freed: its primitives, `len` from `start` in
 /// the primitive order, and the child `slot` of `node` that will refer to it.
@@ -159,11 +144,37 @@ struct Binary<'a> {
     prims: &'a [PrimId],
 }
 
-/// What an 8-wide tree holds: its nodes, and its packs of each packed kind.
+/// An 8-wide subtree: its nodes, depth first from its root, their children counted from
+/// it; the packs its leaves will hold, in the order they are to be stored; its depth.
 #[derive(Default)]
-struct Size {
-    nodes: usize,
-    packs: PackCounts,
+struct Subtree {
+    nodes: Vec<Node8>,
+    packs: Vec<PackToFill>,
+    depth: usize,
+}
+
+impl Subtree {
+    /// Appends `sub` after the nodes held, its children counted from here; returns its
+    /// depth.
+    fn append(&mut self, sub: Subtree) -> usize {
+        let base = self.nodes.len() as u32;
+        self.nodes.extend(sub.nodes.into_iter().map(|mut node| {
+            for child in &mut node.child[..node.count as usize] {
+                // Leaves keep their references, and a pack's slot its 0 until filled (no
+                // node refers to a subtree's root).
+                if *child & LEAF == 0 && *child != 0 {
+                    *child += base;
+                }
+            }
+            node
+        }));
+        self.packs
+            .extend(sub.packs.into_iter().map(|pack| PackToFill {
+                node: pack.node + base,
+                ..pack
+            }));
+        sub.depth
+    }
 }
 
 impl Binary<'_> {
@@ -211,16 +222,72 @@ impl Binary<'_> {
         kids
     }
 
-    /// Adds to `size` what [`Bvh8::emit`] appends for the node over `start`.
-    fn size(&self, start: Vec<Kid>, size: &mut Size) {
-        size.nodes += 1;
-        for kid in self.expand(start) {
-            match self.pack_kind(&kid) {
-                Some(kind) => size.packs[count_index(kind)] += 1,
-                None if self.nodes[kid.node].is_leaf() => {}
-                None => self.size(self.children(&kid), size),
-            }
+    /// The 8-wide subtree over the binary nodes `start` (expanded by [`Binary::expand`]).
+    fn subtree(&self, start: Vec<Kid>) -> Subtree {
+        let mut tree = Subtree::default();
+        tree.depth = self.emit(start, &mut tree);
+        tree
+    }
+
+    /// Appends to `tree` the node over the binary nodes `start` and its subtrees, and the
+    /// packs their leaves will hold; returns the depth of what it appended. A node over
+    /// many primitives has its children's subtrees made on rayon's threads, each into
+    /// its own, and appended in order: the nodes and packs of a walk on one thread.
+    fn emit(&self, start: Vec<Kid>, tree: &mut Subtree) -> usize {
+        let kids = self.expand(start);
+        let index = tree.nodes.len();
+        let boxes: Vec<(Vec3, Vec3)> = kids
+            .iter()
+            .map(|kid| {
+                let b = self.nodes[kid.node].bounds();
+                (b.min, b.max)
+            })
+            .collect();
+        tree.nodes.push(Node8 {
+            boxes: BoxPack8::new(&boxes),
+            child: [0; WIDTH],
+            count: kids.len() as u32,
+        });
+        let interior = |kid: &Kid| !self.is_terminal(kid);
+        let mut made: Vec<Option<Subtree>> =
+            match kids.iter().map(|kid| kid.range.len()).sum::<usize>() > PARALLEL_COLLAPSE
+                && several_threads()
+            {
+                true => kids
+                    .par_iter()
+                    .map(|kid| interior(kid).then(|| self.subtree(self.children(kid))))
+                    .collect(),
+                false => Vec::new(),
+            };
+        let mut depth = 1;
+        for (k, kid) in kids.iter().enumerate() {
+            let child = match self.pack_kind(kid) {
+                Some(_) => {
+                    tree.packs.push(PackToFill {
+                        node: index as u32,
+                        slot: k as u8,
+                        len: kid.range.len() as u8,
+                        start: kid.range.start as u32,
+                    });
+                    // Until the packs are filled.
+                    0
+                }
+                None if self.nodes[kid.node].is_leaf() => {
+                    leaf_ref(RUN, kid.range.len(), kid.range.start)
+                }
+                None => {
+                    let child = tree.nodes.len() as u32;
+                    let below = match made.get_mut(k).and_then(Option::take) {
+                        Some(sub) => tree.append(sub),
+                        None => self.emit(self.children(kid), tree),
+                    };
+                    depth = depth.max(1 + below);
+                    child
+                }
+            };
+            tree.nodes[index].child[k] = child;
         }
+        depth
     }
 
     /// The kind of a subtree that becomes one pack: at most [`PACK`] primitives of one
@@ -274,6 +341,40 @@ mod tests {
             }
             assert!(seen.iter().all(|&n| n == 1), "{seen:?}");
         }
+    }
+
+    #[test]
+    fn several_threads_give_the_one_thread_tree() {
+        // Spheres and triangles mixed, over enough for the parallel collapse.
+        let text: String = (0..3 * PARALLEL_COLLAPSE)
+            .map(|i| {
+                let (x, y, z) = (i % 17, (i / 17) % 13, i / 221);
+                match i % 3 {
+                    0 => format!("p 3\n{x} {y} {z}\n{x}.5 {y} {z}\n{x} {y}.5 {z}\n"),
+                    _ => format!("s {x} {y} {z} 0.05\n"),
+                }
+            })
+            .collect();
+        let scene = parse_text(&text).unwrap();
+        let build = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| Bvh8::build(&scene.geometry, BvhBuild::Sah, [0.0; 2], 0.0))
+                .expect("the tree fits")
+        };
+        let (one, two) = (build(1), build(2));
+        // Packs of both kinds, filled each in its turn.
+        let mut kinds: Vec<u32> = (one.nodes.iter())
+            .flat_map(|node| node.child[..node.count as usize].to_vec())
+            .filter(|&child| child & LEAF != 0)
+            .map(|child| leaf_parts(child).0)
+            .collect();
+        kinds.sort();
+        kinds.dedup();
+        assert_eq!(kinds.len(), 2, "{kinds:?}");
+        assert_eq!(format!("{one:?}"), format!("{two:?}"));
     }
 
     #[test]

@@ -4,7 +4,7 @@
 //! its dispatch are generated from the list ([`packed_kinds!`]); what is done with a pack
 //! is written once, over [`LeafPack`], so that the tree names no kind.
 
-use super::node::{leaf_parts, leaf_ref, pack_code, ChildRef};
+use super::node::{leaf_parts, pack_code, ChildRef};
 use crate::accel::count::CountLanes;
 use crate::accel::hit::ClosestHit;
 use crate::intersect::{LeafPack, PacketQuery, RayQuery};
@@ -12,6 +12,7 @@ use crate::prim::{packed_kinds, PrimId, PrimKind};
 use crate::ray::Hit;
 use crate::scene::Geometry;
 use crate::simd::{for_lanes, F32xP, LaneBits, PACKET};
+use rayon::prelude::*;
 
 /// The packs of one packed kind, and the ids of each pack's primitives lane by lane.
 #[derive(Clone, Debug)]
@@ -29,14 +30,23 @@ impl<K: LeafPack> Packs<K> {
         }
     }
 
-    /// Stores the primitives `ids` of `storage` as one pack; returns its index.
-    fn push(&mut self, storage: &K, ids: &[PrimId]) -> usize {
-        let mut lanes = [ids[0]; 8];
-        lanes[..ids.len()].copy_from_slice(ids);
+    /// Stores `n` packs of `storage`'s primitives after those it holds, pack `i` holding
+    /// `run(i)` (one to eight), made on rayon's threads.
+    fn extend<'p>(&mut self, storage: &K, n: usize, run: impl Fn(usize) -> &'p [PrimId] + Sync)
+    where
+        K: Sync,
+        K::Pack: Send,
+    {
+        let runs = (0..n).into_par_iter().map(&run);
         self.packs
-            .push(storage.pack(ids.iter().map(|id| id.index())));
-        self.ids.push(lanes);
-        self.packs.len() - 1
+            .par_extend(runs.map(|ids| storage.pack(ids.iter().map(|id| id.index()))));
+        self.ids.par_extend((0..n).into_par_iter().map(|i| {
+            let ids = run(i);
+            // Padding lanes repeat the first id.
+            let mut lanes = [ids[0]; 8];
+            lanes[..ids.len()].copy_from_slice(ids);
+            lanes
+        }));
     }
 
     /// Tests pack `index` against `query`, keeping the winner in `closest`.
@@ -183,14 +193,21 @@ macro_rules! define_leaves {
                 }
             }
 
-            /// Stores the primitives `ids` (one to eight, all of one packed kind) as one
-            /// pack, and gives the leaf that holds it.
-            pub fn push(&mut self, geometry: &Geometry, ids: &[PrimId]) -> ChildRef {
-                let kind = ids[0].kind();
+            /// Stores `n` packs of the packed kind `kind` after those it holds, pack `i`
+            /// holding the primitives `run(i)` (one to eight), made on rayon's threads; gives
+            /// the index of the first, which its leaves refer to by [`pack_code`].
+            pub fn extend<'p>(
+                &mut self,
+                geometry: &Geometry,
+                kind: PrimKind,
+                n: usize,
+                run: impl Fn(usize) -> &'p [PrimId] + Sync,
+            ) -> usize {
                 match kind {
                     $(PrimKind::$kind => {
-                        let index = self.$field.push(&geometry.$field, ids);
-                        leaf_ref(pack_code(kind), ids.len(), index)
+                        let first = self.$field.packs.len();
+                        self.$field.extend(&geometry.$field, n, run);
+                        first
                     })*
                     _ => unreachable!("{kind:?} is not packed"),
                 }
