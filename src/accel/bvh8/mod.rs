@@ -74,6 +74,12 @@ fn out_of_line<R>(walk: impl FnOnce() -> R) -> R {
     walk()
 }
 
+/// Trees of more nodes than this (2 MiB of them, a core's second-level cache here) have
+/// their nodes asked for as the walks push them: whole renders of half a million to 8
+/// million triangles, or of 600,000 spheres, then took 4-12% less time, while in trees
+/// that the caches hold the asking added work to the protocol's sets.
+const PREFETCHED_NODES: usize = 8192;
+
 /// The walks from the root: one ray's in `traverse.rs`, a packet's in `packet.rs`.
 impl Structure for Bvh8 {
     #[inline]
@@ -128,15 +134,17 @@ impl Structure for Bvh8 {
 }
 
 impl Bvh8 {
-    /// Asks the cache for the pack of `child` if it is a pack leaf, and for the ids of its
-    /// primitives where a walk looks for the closest hit (whose id it reads). The walks
-    /// ask as they push a child: a pack (eight lines) read cold stalls the test that reads
-    /// it, and one pushed is most often entered. The single-ray occlusion walk does not
-    /// ask: it gained nothing measurable there.
+    /// Asks the cache for `child`: its pack if it is a pack leaf, with the ids of its
+    /// primitives where a walk looks for the closest hit (whose id it reads); its node in
+    /// a tree of more than [`PREFETCHED_NODES`]. The walks ask as they push a child: a
+    /// pack (up to eight lines) or a node (four) read cold stalls the test that reads it,
+    /// and one pushed is most often entered.
     #[inline(always)]
-    fn prefetch_pack(&self, child: ChildRef, closest: bool) {
+    fn prefetch_child(&self, child: ChildRef, closest: bool) {
         if child & LEAF != 0 {
             self.leaves.prefetch(child, closest);
+        } else if self.nodes.len() > PREFETCHED_NODES {
+            crate::simd::prefetch(&self.nodes[child as usize]);
         }
     }
 

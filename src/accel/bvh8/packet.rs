@@ -104,7 +104,7 @@ impl Bvh8 {
                 let hit = intervals.hit & kept;
                 if hit.any() {
                     let nearest = hit.select(intervals.entry, F32xP::splat(f32::INFINITY));
-                    self.prefetch_pack(node.child[c], true);
+                    self.prefetch_child(node.child[c], true);
                     let entry = (node.child[c], hit.bitmask(), nearest.min_lane());
                     stack.push_sorted(floor, entry, |e| e.2);
                 }
@@ -185,7 +185,7 @@ impl Bvh8 {
                 let intervals = box_rays.interval(min, max, lanes_t_min, lanes_t_max);
                 let hit = intervals.hit.bitmask() & lanes;
                 if hit != 0 {
-                    self.prefetch_pack(node.child[c], false);
+                    self.prefetch_child(node.child[c], false);
                     stack.push((node.child[c], hit));
                 }
             });

@@ -87,7 +87,7 @@ impl Bvh8 {
             // The hit children sorted on the stack, the nearest on top to be popped next.
             let floor = stack.len();
             for_lanes(hits, |k| {
-                self.prefetch_pack(node.child[k], true);
+                self.prefetch_child(node.child[k], true);
                 stack.push_sorted(floor, (node.child[k], entries[k]), |e| e.1)
             });
         }
@@ -121,7 +121,10 @@ impl Bvh8 {
             if hits != 0 {
                 // The last child pushed is the one popped next: it skips the stack.
                 let last = hits.ilog2() as usize;
-                for_lanes(hits & !(1 << last), |k| stack.push(node.child[k]));
+                for_lanes(hits & !(1 << last), |k| {
+                    self.prefetch_child(node.child[k], false);
+                    stack.push(node.child[k])
+                });
                 next = Some(node.child[last]);
             }
         }
