@@ -11,7 +11,7 @@ use std::ops::Range;
 
 use glam::Vec3;
 
-use super::leaves::{count_index, Leaves, PackCounts};
+use super::leaves::Leaves;
 use super::node::{leaf_ref, pack_code, Node8, LEAF, MAX_LEAF_PRIMS, MAX_PRIMS, RUN, WIDTH};
 use super::Bvh8;
 use crate::accel::bvh2::{several_threads, Bvh2, BvhBuild, Node};
@@ -70,17 +70,14 @@ impl Bvh8 {
         };
         drop(nodes);
         // Trimmed before the packs are allocated: trimmed beside them, the copy and the
-        // grown array held with them made the peak of `tests/memory/huge_mesh.rs`.
+        // grown array held with them made the peak of `tests/memory/huge_mesh.rs`. Each
+        // kind's packs are then allocated at their number by `fill`.
         wide.shrink_to_fit();
         packs.shrink_to_fit();
-        let mut counts = PackCounts::default();
-        for pack in &packs {
-            counts[count_index(prims[pack.start as usize].kind())] += 1;
-        }
         let mut tree = Bvh8 {
             nodes: wide,
             prims: Vec::new(),
-            leaves: Leaves::with_capacity(&counts),
+            leaves: Leaves::new(),
             depth,
             build,
             binary: stats,
@@ -95,11 +92,11 @@ impl Bvh8 {
     fn fill(&mut self, geometry: &Geometry, prims: &[PrimId], mut packs: Vec<PackToFill>) {
         let ids = |pack: &PackToFill| &prims[pack.start as usize..][..pack.len as usize];
         let kind_of = |pack: &PackToFill| prims[pack.start as usize].kind();
-        // Each kind's packs side by side, in the order of `PrimKind::PACKED`, and still in
-        // their order within a kind (a scene of one packed kind has them so: no sort's
-        // scratch beside them).
-        if !packs.is_sorted_by_key(|pack| count_index(kind_of(pack))) {
-            packs.sort_by_key(|pack| count_index(kind_of(pack)));
+        // Each kind's packs side by side, in the order of `PrimKind::PACKED` (which their
+        // codes follow), and still in their order within a kind (a scene of one packed
+        // kind has them so: no sort's scratch beside them).
+        if !packs.is_sorted_by_key(|pack| pack_code(kind_of(pack))) {
+            packs.sort_by_key(|pack| pack_code(kind_of(pack)));
         }
         let mut rest = &packs[..];
         for kind in PrimKind::PACKED {

@@ -23,20 +23,22 @@ struct Packs<K: LeafPack> {
 }
 
 impl<K: LeafPack> Packs<K> {
-    fn with_capacity(n: usize) -> Self {
+    fn new() -> Self {
         Packs {
-            packs: Vec::with_capacity(n),
-            ids: Vec::with_capacity(n),
+            packs: Vec::new(),
+            ids: Vec::new(),
         }
     }
 
     /// Stores `n` packs of `storage`'s primitives after those it holds, pack `i` holding
-    /// `run(i)` (one to eight), made on rayon's threads.
+    /// `run(i)` (one to eight), made on rayon's threads into room made for exactly them.
     fn extend<'p>(&mut self, storage: &K, n: usize, run: impl Fn(usize) -> &'p [PrimId] + Sync)
     where
         K: Sync,
         K::Pack: Send,
     {
+        self.packs.reserve_exact(n);
+        self.ids.reserve_exact(n);
         let runs = (0..n).into_par_iter().map(&run);
         self.packs
             .par_extend(runs.map(|ids| storage.pack(ids.iter().map(|id| id.index()))));
@@ -169,14 +171,6 @@ const CLOSEST_WEIGHTS: (usize, usize) = if PACKET == 16 { (3, 2) } else { (1, 1)
 /// stops once all are (at 8 lanes, weighed alike: mount_very_high shadow -3.5%).
 const OCCLUSION_WEIGHTS: (usize, usize) = if PACKET == 16 { (1, 1) } else { (2, 3) };
 
-/// How many packs of each packed kind a tree holds, by [`pack_code`] less one.
-pub type PackCounts = [usize; PrimKind::PACKED.len()];
-
-/// The place of `kind`'s packs in [`PackCounts`].
-pub fn count_index(kind: PrimKind) -> usize {
-    pack_code(kind) as usize - 1
-}
-
 macro_rules! define_leaves {
     ($($kind:ident, $field:ident, $storage:ident;)*) => {
         /// The packs of every packed kind, one field a kind.
@@ -186,10 +180,10 @@ macro_rules! define_leaves {
         }
 
         impl Leaves {
-            /// Room for as many packs of each kind as `counts` says.
-            pub fn with_capacity(counts: &PackCounts) -> Self {
+            /// No packs yet.
+            pub fn new() -> Self {
                 Leaves {
-                    $($field: Packs::with_capacity(counts[count_index(PrimKind::$kind)]),)*
+                    $($field: Packs::new(),)*
                 }
             }
 
