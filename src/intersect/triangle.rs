@@ -686,48 +686,62 @@ fn self_hit_margin8([a, b, c]: [F32x8; 3], [w, u, v]: [F32x8; 3], area: F32x8) -
         + F32x8::splat(gamma(14)) * (w.abs() * a + u.abs() * b + v.abs() * c)
 }
 
-/// Triangles stored as their three vertices (what the watertight test reads), one
-/// [`Triangle`] record each. Degenerate triangles (of zero area in single precision) are
-/// stored with NaN vertices, which the test never hits and the structures leave out (their
-/// box is empty).
+/// Triangles as corners of shared vertices, one [`Triangle`] record each: a mesh's
+/// vertices are stored once, as the file gives them. Degenerate triangles (of zero area
+/// in single precision) have a NaN vertex at every corner, which the test never hits and
+/// the structures leave out (their box is empty).
 ///
-/// Records, not an array per coordinate: the SIMD tests read the leaf packs
-/// ([`TrianglePack8`], structure of arrays), so this storage is read one triangle at a
-/// time, by a hit's surface point above all, where nine coordinate arrays and two of
-/// indices cost eleven cache lines and a record one or two.
+/// Records, not an array per field: the SIMD tests read the leaf packs
+/// ([`TrianglePack8`], structure of arrays, where the vertices are laid out for the test),
+/// so this storage is read one triangle at a time, by a hit's surface point above all.
+/// Indexed, not three vertices a record: the packs hold each triangle's vertices already,
+/// and a mesh's record takes 20 bytes and its vertices about 6 a triangle, where three
+/// vertices took 36.
 #[derive(Clone, Debug, Default)]
 pub struct Triangles {
+    /// The vertices that the records' corners index.
+    pub positions: Vec<Vec3>,
     pub records: Vec<Triangle>,
     pub vertex_normals: Vec<[Vec3; 3]>,
 }
 
-/// One triangle of [`Triangles`]: 44 bytes.
+/// One triangle of [`Triangles`]: 20 bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C)]
 pub struct Triangle {
-    pub vertices: [Vec3; 3],
+    /// Its vertices' indices in [`Triangles::positions`].
+    pub corners: [u32; 3],
     pub material: u32,
     /// Index into `vertex_normals` for smooth (`pp`) triangles, [`Triangles::FLAT`]
     /// otherwise.
     pub shading: u32,
 }
 
-impl Triangle {
-    /// The edges `p1 - p0` and `p2 - p0`.
-    #[inline(always)]
-    pub fn edges(&self) -> [Vec3; 2] {
-        let [p0, p1, p2] = self.vertices;
-        [p1 - p0, p2 - p0]
-    }
-}
-
 impl Triangles {
     pub const FLAT: u32 = u32::MAX;
 
+    /// Makes room for `additional` more triangles (their records; a mesh's vertices are
+    /// reserved by [`Triangles::add_vertices`]), so that a mesh of known size is read
+    /// without growing them by doubling, which held a copy and a half of them at once.
+    pub fn reserve(&mut self, additional: usize) {
+        self.records.reserve_exact(additional);
+    }
+
+    /// Stores `vertices` for triangles to share ([`Triangles::push_indexed`]); gives the
+    /// index of the first.
+    ///
+    /// # Panics
+    /// If the triangles would then have more than `u32::MAX` vertices.
+    pub fn add_vertices(&mut self, vertices: impl ExactSizeIterator<Item = Vec3>) -> u32 {
+        let first = self.first_free_vertex(vertices.len());
+        self.positions.reserve_exact(vertices.len());
+        self.positions.extend(vertices);
+        first
+    }
+
+    /// Stores the triangle of the vertices `p` with its own copy of them, flat or with
+    /// vertex `normals`.
     pub fn push(&mut self, p: [Vec3; 3], normals: Option<[Vec3; 3]>, material: u32) {
-        let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
-        let degenerate = !(e1.cross(e2).length_squared() > 0.0);
-        let vertices = if degenerate { [Vec3::NAN; 3] } else { p };
         let shading = match normals {
             Some(n) => {
                 self.vertex_normals.push(n);
@@ -735,16 +749,64 @@ impl Triangles {
             }
             None => Self::FLAT,
         };
+        let first = self.add_vertices(p.into_iter());
+        self.push_record([first, first + 1, first + 2], material, shading);
+    }
+
+    /// Stores the flat triangle whose vertices are `corners` of those stored.
+    ///
+    /// # Panics
+    /// If a corner is not a stored vertex.
+    pub fn push_indexed(&mut self, corners: [u32; 3], material: u32) {
+        assert!(
+            corners.iter().all(|&c| (c as usize) < self.positions.len()),
+            "a corner beyond the {} vertices",
+            self.positions.len()
+        );
+        self.push_record(corners, material, Self::FLAT);
+    }
+
+    fn push_record(&mut self, corners: [u32; 3], material: u32, shading: u32) {
+        let [p0, p1, p2] = corners.map(|c| self.positions[c as usize]);
+        let degenerate = !((p1 - p0).cross(p2 - p0).length_squared() > 0.0);
+        let corners = if degenerate {
+            // A vertex of its own, NaN, at every corner.
+            let nan = self.first_free_vertex(1);
+            self.positions.push(Vec3::NAN);
+            [nan; 3]
+        } else {
+            corners
+        };
         self.records.push(Triangle {
-            vertices,
+            corners,
             material,
             shading,
         });
     }
 
+    /// The index the next of `n` vertices will take.
+    fn first_free_vertex(&self, n: usize) -> u32 {
+        u32::try_from(self.positions.len() + n)
+            .map(|_| self.positions.len() as u32)
+            .expect("at most u32::MAX triangle vertices")
+    }
+
+    /// The vertices of triangle `i`.
+    #[inline(always)]
+    pub fn vertices(&self, i: usize) -> [Vec3; 3] {
+        self.records[i].corners.map(|c| self.positions[c as usize])
+    }
+
+    /// The edges `p1 - p0` and `p2 - p0` of triangle `i`, and its vertex `p0`.
+    #[inline(always)]
+    fn edges(&self, i: usize) -> ([Vec3; 2], Vec3) {
+        let [p0, p1, p2] = self.vertices(i);
+        ([p1 - p0, p2 - p0], p0)
+    }
+
     /// Unit geometric normal `normalize((p1 - p0) x (p2 - p0))`.
     pub fn geometric_normal(&self, i: usize) -> Vec3 {
-        let [e1, e2] = self.records[i].edges();
+        let ([e1, e2], _) = self.edges(i);
         e1.cross(e2).normalize_or_zero()
     }
 
@@ -767,7 +829,7 @@ impl LeafPack for Triangles {
     type Pack = TrianglePack8;
 
     fn pack(&self, indices: impl Iterator<Item = usize>) -> TrianglePack8 {
-        let triangles: Vec<[Vec3; 3]> = indices.map(|i| self.records[i].vertices).collect();
+        let triangles: Vec<[Vec3; 3]> = indices.map(|i| self.vertices(i)).collect();
         TrianglePack8::new(&triangles)
     }
 
@@ -803,6 +865,7 @@ impl Shapes for Triangles {
     }
 
     fn shrink_to_fit(&mut self) {
+        self.positions.shrink_to_fit();
         self.records.shrink_to_fit();
         self.vertex_normals.shrink_to_fit();
     }
@@ -812,12 +875,12 @@ impl Shapes for Triangles {
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {
-        corner_box(self.records[i].vertices).unwrap_or(Aabb::EMPTY)
+        corner_box(self.vertices(i)).unwrap_or(Aabb::EMPTY)
     }
 
     #[inline]
     fn intersect(&self, i: usize, query: &RayQuery, t_max: f32) -> Option<ShapeHit> {
-        triangle_hit(query, self.records[i].vertices, t_max)
+        triangle_hit(query, self.vertices(i), t_max)
     }
 
     fn intersect_packet(
@@ -827,7 +890,7 @@ impl Shapes for Triangles {
         t_max: F32xP,
         active: LaneBits,
     ) -> PacketHits {
-        let vertices = self.records[i].vertices;
+        let vertices = self.vertices(i);
         triangle_packet(query, vertices, query.t_min_lanes(), t_max, active)
     }
 
@@ -838,7 +901,7 @@ impl Shapes for Triangles {
     }
 
     fn geometric_normal64(&self, i: usize, _p: DVec3, _u: f32, _v: f32) -> DVec3 {
-        let [e1, e2] = self.records[i].edges();
+        let ([e1, e2], _) = self.edges(i);
         e1.cross(e2).as_dvec3().normalize()
     }
 
@@ -856,10 +919,8 @@ impl Shapes for Triangles {
     /// most.
     #[inline]
     fn surface_point(&self, i: usize, _ray: &Ray, _t: f32, u: f32, v: f32) -> SurfacePoint {
-        let record = &self.records[i];
-        let [e1, e2] = record.edges();
+        let ([e1, e2], p0) = self.edges(i);
         let (along1, along2) = (u * e1, v * e2);
-        let p0 = record.vertices[0];
         let point = p0 + along1 + along2;
         // One cross product for the bound's area and the normal.
         let cross = e1.cross(e2);
@@ -873,17 +934,24 @@ impl Shapes for Triangles {
         SurfacePoint {
             point,
             error: gamma(7) * (p0.abs() + along1.abs() + along2.abs()) + Vec3::splat(margin),
-            normal: self.shading_normal(record.shading, u, v, || cross.normalize_or_zero()),
+            normal: self
+                .shading_normal(self.records[i].shading, u, v, || cross.normalize_or_zero()),
         }
     }
 
     /// The flat triangles' points eight at a time; a smooth one's lane (vertex normals)
     /// is left to [`Shapes::surface_point`].
     fn surface_points8(&self, indices: [usize; 8], rays: &[Ray; 8], hits: &Hits8) -> SurfacePoint8 {
-        let records = indices.map(|i| &self.records[i]);
-        let vertex = |k: usize| Vec3x8::from_lanes(records.map(|r| r.vertices[k]));
-        let p0 = vertex(0);
-        let (e1, e2) = (vertex(1) - p0, vertex(2) - p0);
+        // Gathered corner by corner: the records' loads first, then the vertices'.
+        let corners = indices.map(|i| self.records[i].corners);
+        let mut lanes = [[Vec3::ZERO; 8]; 3];
+        for (k, corner) in corners.iter().enumerate() {
+            for (lane, &c) in lanes.iter_mut().zip(corner) {
+                lane[k] = self.positions[c as usize];
+            }
+        }
+        let [p0, p1, p2] = lanes.map(Vec3x8::from_lanes);
+        let (e1, e2) = (p1 - p0, p2 - p0);
         let (u, v) = (F32x8::from_array(hits.u), F32x8::from_array(hits.v));
         let (along1, along2) = (e1.scale(u), e2.scale(v));
         let point = p0 + along1 + along2;
@@ -906,10 +974,9 @@ impl Shapes for Triangles {
             error,
             normal,
         };
-        for (k, record) in records.iter().enumerate() {
-            if record.shading != Self::FLAT {
-                let scalar =
-                    self.surface_point(indices[k], &rays[k], hits.t[k], hits.u[k], hits.v[k]);
+        for (k, &i) in indices.iter().enumerate() {
+            if self.records[i].shading != Self::FLAT {
+                let scalar = self.surface_point(i, &rays[k], hits.t[k], hits.u[k], hits.v[k]);
                 points.set_lane(k, scalar);
             }
         }
@@ -1064,8 +1131,8 @@ mod tests {
         let mut triangles = Triangles::default();
         triangles.push([Vec3::ZERO, Vec3::X, 2.0 * Vec3::X], None, 0);
         triangles.push(UNIT, None, 0);
-        assert!(triangles.records[0].vertices[0].is_nan());
-        assert_eq!(triangles.records[1].vertices, UNIT);
+        assert!(triangles.vertices(0)[0].is_nan());
+        assert_eq!(triangles.vertices(1), UNIT);
         assert_eq!(triangles.bounds(0, [0.0; 2]), Aabb::EMPTY);
     }
 

@@ -686,8 +686,15 @@ impl<'a> Parser<'a> {
             vertices.push(self.point("a vertex coordinate")?);
         }
         let material = self.object_material();
+        // The vertices stored once for all the mesh's triangles.
+        let first = self
+            .scene
+            .geometry
+            .triangles
+            .add_vertices(vertices.into_iter());
+        self.scene.geometry.triangles.reserve(nt);
         for _ in 0..nt {
-            let mut corner = [Vec3::ZERO; 3];
+            let mut corner = [0; 3];
             for c in &mut corner {
                 let (k, token) = self.integer("a vertex index")?;
                 // 1-based; -k is the k-th vertex from the end.
@@ -698,9 +705,9 @@ impl<'a> Parser<'a> {
                         format!("vertex index {k} is out of range (1..={nv}, or -{nv}..=-1 from the end)"),
                     ));
                 }
-                *c = vertices[index as usize];
+                *c = first + index as u32;
             }
-            self.scene.geometry.triangles.push(corner, None, material);
+            self.scene.geometry.triangles.push_indexed(corner, material);
         }
         self.scene.meshes += 1;
         self.scene.mesh_triangles += nt;

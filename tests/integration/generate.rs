@@ -147,7 +147,7 @@ fn mount_scenes_have_the_course_counts_and_spheres_clear_of_the_rock() {
         for s in 0..4 {
             let (c, r) = (g.spheres.records[s].centre, g.spheres.records[s].radius);
             for t in 0..triangles {
-                let v = g.triangles.records[t].vertices[0];
+                let v = g.triangles.vertices(t)[0];
                 if v.truncate().distance(c.truncate()) <= r {
                     assert!(
                         v.z < c.z - r,
@@ -290,7 +290,7 @@ fn dragon_scene_places_a_gzipped_ply_model_on_the_floor() {
     assert_eq!(scene.mesh_triangles, 4);
     let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
     for i in 2..6 {
-        for v in t.records[i].vertices {
+        for v in t.vertices(i) {
             (lo, hi) = (lo.min(v), hi.max(v));
         }
     }

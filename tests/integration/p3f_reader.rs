@@ -76,7 +76,22 @@ fn mesh_negative_indices_count_from_the_end() {
     let scene =
         parse_text("f 1 1 1 1 0 0 0 0 1 0 1\nmesh 3 1\n0 0 0\n1 0 0\n0 1 0\n-3 -2 -1\n").unwrap();
     let t = &scene.geometry.triangles;
-    assert_eq!(t.records[0].vertices, [Vec3::ZERO, Vec3::X, Vec3::Y]);
+    assert_eq!(t.vertices(0), [Vec3::ZERO, Vec3::X, Vec3::Y]);
+}
+
+#[test]
+fn a_mesh_stores_its_vertices_once() {
+    let scene =
+        parse_text("mesh 5 3\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n1 2 3\n1 3 4\n1 2 5\n").unwrap();
+    let t = &scene.geometry.triangles;
+    // The third triangle's corners are in a line: a NaN vertex of its own, never hit.
+    assert_eq!(t.positions.len(), 5 + 1);
+    assert_eq!(t.records[1].corners, [0, 2, 3]);
+    assert_eq!(
+        t.vertices(1),
+        [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::Y]
+    );
+    assert!(t.vertices(2).iter().all(|v| v.is_nan()));
 }
 
 #[test]

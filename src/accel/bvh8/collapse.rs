@@ -12,7 +12,9 @@ use std::ops::Range;
 use glam::Vec3;
 
 use super::leaves::Leaves;
-use super::node::{leaf_ref, pack_code, Node8, LEAF, MAX_LEAF_PRIMS, MAX_PRIMS, RUN, WIDTH};
+use super::node::{
+    leaf_parts, leaf_ref, pack_code, ChildRef, Node8, LEAF, MAX_LEAF_PRIMS, MAX_PRIMS, RUN, WIDTH,
+};
 use super::Bvh8;
 use crate::accel::bvh2::{several_threads, Bvh2, BvhBuild, Node};
 use crate::intersect::BoxPack8;
@@ -83,8 +85,17 @@ impl Bvh8 {
             binary: stats,
         };
         tree.fill(geometry, &prims, packs);
-        tree.prims = prims;
+        // The packs hold their own ids: the order is kept only for runs to index.
+        if tree.has_runs() {
+            tree.prims = prims;
+        }
         Ok(tree)
+    }
+
+    /// Whether a leaf is a run of the primitive order rather than a pack.
+    fn has_runs(&self) -> bool {
+        let run = |&child: &ChildRef| child & LEAF != 0 && leaf_parts(child).0 == RUN;
+        (self.nodes.iter()).any(|node| node.child[..node.count as usize].iter().any(run))
     }
 
     /// Fills the packs `packs` over `prims`, each kind's in the order they come (on
@@ -308,9 +319,10 @@ mod tests {
     use crate::scene::p3f::parse_text;
 
     impl Bvh8 {
-        /// Every primitive in exactly one leaf, every child's box inside its parent's.
-        fn validate(&self) {
-            let mut seen = vec![0u32; self.prims.len()];
+        /// Every primitive of `all` in exactly one leaf, every child's box inside its
+        /// parent's.
+        fn validate(&self, all: &[PrimId]) {
+            let mut seen = vec![0u32; all.len()];
             let mut stack = vec![(0u32, [Vec3::NEG_INFINITY, Vec3::INFINITY])];
             while let Some((child, [lo, hi])) = stack.pop() {
                 if child & LEAF != 0 {
@@ -320,7 +332,7 @@ mod tests {
                         _ => &self.leaves.ids(child)[..count],
                     };
                     for id in ids {
-                        let k = self.prims.iter().position(|p| p == id).unwrap();
+                        let k = all.iter().position(|p| p == id).unwrap();
                         seen[k] += 1;
                     }
                     continue;
@@ -387,9 +399,9 @@ mod tests {
             let scene = parse_text(&text).unwrap();
             for build in [BvhBuild::Sah, BvhBuild::Midpoint] {
                 let bvh2 = Bvh2::build(&scene.geometry, build, [0.0, 0.0], 0.0);
-                let binary_depth = bvh2.depth();
+                let (binary_depth, all) = (bvh2.depth(), bvh2.prims().to_vec());
                 let wide = Bvh8::collapse(bvh2, &scene.geometry).expect("small trees collapse");
-                wide.validate();
+                wide.validate(&all);
                 assert!(wide.depth() <= binary_depth);
             }
         }
