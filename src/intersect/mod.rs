@@ -5,8 +5,9 @@
 //! packet tests, the normal, the surface point. It is structure of arrays ([`Vec3s`] and
 //! plain `Vec`s, one array per field), except for the kinds that fill BVH leaves: their
 //! SIMD tests read the leaves' packs (eight primitives side by side), so their storage
-//! is read a primitive at a time, by each hit's surface point, and holds a record per
-//! primitive ([`Triangle`], [`Sphere`]) that one or two cache lines bring.
+//! is read a primitive at a time, by each hit's surface point: a record per sphere
+//! ([`Sphere`]) that one or two cache lines bring, a triangle's corners in its mesh's
+//! vertices ([`Triangles`]).
 //! [`crate::scene::Geometry`] holds one storage per kind of the list in [`crate::prim`]
 //! and dispatches to them.
 //!
@@ -70,8 +71,8 @@ pub use sphere::{
     MIN_RADIUS,
 };
 pub use triangle::{
-    frame_of, triangle, triangle_leaf, triangle_packet, Axis, Shear, ShearLanes, Triangle,
-    TrianglePack8, Triangles,
+    frame_of, triangle, triangle_leaf, triangle_packet, Axis, Shear, ShearLanes, TrianglePack8,
+    Triangles,
 };
 
 /// A packet's lanes of [`ShapeHit`], as its kernels give them.

@@ -686,45 +686,47 @@ fn self_hit_margin8([a, b, c]: [F32x8; 3], [w, u, v]: [F32x8; 3], area: F32x8) -
         + F32x8::splat(gamma(14)) * (w.abs() * a + u.abs() * b + v.abs() * c)
 }
 
-/// Triangles as corners of shared vertices, one [`Triangle`] record each: a mesh's
-/// vertices are stored once, as the file gives them. Degenerate triangles (of zero area
-/// in single precision) have a NaN vertex at every corner, which the test never hits and
-/// the structures leave out (their box is empty).
+/// Triangles as corners of shared vertices: a mesh's vertices are stored once, as the
+/// file gives them. Degenerate triangles (of zero area in single precision) have a NaN
+/// vertex at every corner, which the test never hits and the structures leave out (their
+/// box is empty).
 ///
-/// Records, not an array per field: the SIMD tests read the leaf packs
-/// ([`TrianglePack8`], structure of arrays, where the vertices are laid out for the test),
-/// so this storage is read one triangle at a time, by a hit's surface point above all.
-/// Indexed, not three vertices a record: the packs hold each triangle's vertices already,
-/// and a mesh's record takes 20 bytes and its vertices about 6 a triangle, where three
-/// vertices took 36.
+/// Read one triangle at a time, by a hit's surface point above all: the SIMD tests read
+/// the leaf packs ([`TrianglePack8`], structure of arrays, where the vertices are laid out
+/// for the test). Indexed, not three vertices a triangle: the packs hold each triangle's
+/// vertices already, and a mesh's corners take 12 bytes and its vertices about 6 a
+/// triangle, where three vertices took 36. Materials and vertex normals go by runs of
+/// triangles, as files give them (a mesh is one run), not 8 bytes a triangle.
 #[derive(Clone, Debug, Default)]
 pub struct Triangles {
-    /// The vertices that the records' corners index.
+    /// The vertices that the corners index.
     pub positions: Vec<Vec3>,
-    pub records: Vec<Triangle>,
+    /// Each triangle's vertices, as indices in `positions`.
+    pub corners: Vec<[u32; 3]>,
+    /// The triangles' materials and shading, a run of consecutive triangles alike at a
+    /// time, by their first triangle.
+    runs: Vec<Run>,
     pub vertex_normals: Vec<[Vec3; 3]>,
 }
 
-/// One triangle of [`Triangles`]: 20 bytes.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C)]
-pub struct Triangle {
-    /// Its vertices' indices in [`Triangles::positions`].
-    pub corners: [u32; 3],
-    pub material: u32,
-    /// Index into `vertex_normals` for smooth (`pp`) triangles, [`Triangles::FLAT`]
-    /// otherwise.
-    pub shading: u32,
+/// The triangles from `first` up to the next run's first: of one material, and flat
+/// (`normals` is [`Triangles::FLAT`]) or smooth, triangle `first + k` with the vertex
+/// normals `normals + k`.
+#[derive(Clone, Copy, Debug)]
+struct Run {
+    first: u32,
+    material: u32,
+    normals: u32,
 }
 
 impl Triangles {
     pub const FLAT: u32 = u32::MAX;
 
-    /// Makes room for `additional` more triangles (their records; a mesh's vertices are
+    /// Makes room for `additional` more triangles (their corners; a mesh's vertices are
     /// reserved by [`Triangles::add_vertices`]), so that a mesh of known size is read
     /// without growing them by doubling, which held a copy and a half of them at once.
     pub fn reserve(&mut self, additional: usize) {
-        self.records.reserve_exact(additional);
+        self.corners.reserve_exact(additional);
     }
 
     /// Stores `vertices` for triangles to share ([`Triangles::push_indexed`]); gives the
@@ -750,7 +752,7 @@ impl Triangles {
             None => Self::FLAT,
         };
         let first = self.add_vertices(p.into_iter());
-        self.push_record([first, first + 1, first + 2], material, shading);
+        self.push_corners([first, first + 1, first + 2], material, shading);
     }
 
     /// Stores the flat triangle whose vertices are `corners` of those stored.
@@ -763,10 +765,10 @@ impl Triangles {
             "a corner beyond the {} vertices",
             self.positions.len()
         );
-        self.push_record(corners, material, Self::FLAT);
+        self.push_corners(corners, material, Self::FLAT);
     }
 
-    fn push_record(&mut self, corners: [u32; 3], material: u32, shading: u32) {
+    fn push_corners(&mut self, corners: [u32; 3], material: u32, shading: u32) {
         let [p0, p1, p2] = corners.map(|c| self.positions[c as usize]);
         let degenerate = !((p1 - p0).cross(p2 - p0).length_squared() > 0.0);
         let corners = if degenerate {
@@ -777,11 +779,41 @@ impl Triangles {
         } else {
             corners
         };
-        self.records.push(Triangle {
-            corners,
-            material,
-            shading,
+        let index = self.corners.len() as u32;
+        let continues = self.runs.last().is_some_and(|run| {
+            run.material == material
+                && match (run.normals, shading) {
+                    (Self::FLAT, Self::FLAT) => true,
+                    (Self::FLAT, _) | (_, Self::FLAT) => false,
+                    (normals, shading) => shading == normals + (index - run.first),
+                }
         });
+        if !continues {
+            self.runs.push(Run {
+                first: index,
+                material,
+                normals: shading,
+            });
+        }
+        self.corners.push(corners);
+    }
+
+    /// The run that holds triangle `i`.
+    #[inline]
+    fn run(&self, i: usize) -> &Run {
+        let after = self.runs.partition_point(|run| run.first as usize <= i);
+        &self.runs[after - 1]
+    }
+
+    /// Triangle `i`'s index into `vertex_normals` if it is smooth, [`Triangles::FLAT`]
+    /// otherwise.
+    #[inline]
+    pub fn shading(&self, i: usize) -> u32 {
+        let run = self.run(i);
+        match run.normals {
+            Self::FLAT => Self::FLAT,
+            normals => normals + (i as u32 - run.first),
+        }
     }
 
     /// The index the next of `n` vertices will take.
@@ -794,7 +826,7 @@ impl Triangles {
     /// The vertices of triangle `i`.
     #[inline(always)]
     pub fn vertices(&self, i: usize) -> [Vec3; 3] {
-        self.records[i].corners.map(|c| self.positions[c as usize])
+        self.corners[i].map(|c| self.positions[c as usize])
     }
 
     /// The edges `p1 - p0` and `p2 - p0` of triangle `i`, and its vertex `p0`.
@@ -861,17 +893,18 @@ impl LeafPack for Triangles {
 
 impl Shapes for Triangles {
     fn len(&self) -> usize {
-        self.records.len()
+        self.corners.len()
     }
 
     fn shrink_to_fit(&mut self) {
         self.positions.shrink_to_fit();
-        self.records.shrink_to_fit();
+        self.corners.shrink_to_fit();
+        self.runs.shrink_to_fit();
         self.vertex_normals.shrink_to_fit();
     }
 
     fn material(&self, i: usize) -> u32 {
-        self.records[i].material
+        self.run(i).material
     }
 
     fn bounds(&self, i: usize, _shutter: [f32; 2]) -> Aabb {
@@ -897,7 +930,7 @@ impl Shapes for Triangles {
     /// The geometric normal of P3F.md section 2 (triangles have no inside), or for smooth
     /// triangles the vertex normals interpolated at `(u, v)`.
     fn normal(&self, i: usize, _p: Vec3, u: f32, v: f32, _time: f32) -> Vec3 {
-        self.shading_normal(self.records[i].shading, u, v, || self.geometric_normal(i))
+        self.shading_normal(self.shading(i), u, v, || self.geometric_normal(i))
     }
 
     fn geometric_normal64(&self, i: usize, _p: DVec3, _u: f32, _v: f32) -> DVec3 {
@@ -934,16 +967,15 @@ impl Shapes for Triangles {
         SurfacePoint {
             point,
             error: gamma(7) * (p0.abs() + along1.abs() + along2.abs()) + Vec3::splat(margin),
-            normal: self
-                .shading_normal(self.records[i].shading, u, v, || cross.normalize_or_zero()),
+            normal: self.shading_normal(self.shading(i), u, v, || cross.normalize_or_zero()),
         }
     }
 
     /// The flat triangles' points eight at a time; a smooth one's lane (vertex normals)
     /// is left to [`Shapes::surface_point`].
     fn surface_points8(&self, indices: [usize; 8], rays: &[Ray; 8], hits: &Hits8) -> SurfacePoint8 {
-        // Gathered corner by corner: the records' loads first, then the vertices'.
-        let corners = indices.map(|i| self.records[i].corners);
+        // Gathered corner by corner: the corners' loads first, then the vertices'.
+        let corners = indices.map(|i| self.corners[i]);
         let mut lanes = [[Vec3::ZERO; 8]; 3];
         for (k, corner) in corners.iter().enumerate() {
             for (lane, &c) in lanes.iter_mut().zip(corner) {
@@ -975,7 +1007,7 @@ impl Shapes for Triangles {
             normal,
         };
         for (k, &i) in indices.iter().enumerate() {
-            if self.records[i].shading != Self::FLAT {
+            if self.shading(i) != Self::FLAT {
                 let scalar = self.surface_point(i, &rays[k], hits.t[k], hits.u[k], hits.v[k]);
                 points.set_lane(k, scalar);
             }
@@ -1134,6 +1166,43 @@ mod tests {
         assert!(triangles.vertices(0)[0].is_nan());
         assert_eq!(triangles.vertices(1), UNIT);
         assert_eq!(triangles.bounds(0, [0.0; 2]), Aabb::EMPTY);
+    }
+
+    #[test]
+    fn each_triangle_keeps_its_material_and_normals_in_runs() {
+        // (material, smooth) of each triangle pushed: runs begin and end at every change.
+        let pushed = [
+            (0, false),
+            (0, false),
+            (1, false),
+            (1, true),
+            (1, true),
+            (2, true),
+            (2, false),
+            (2, true),
+            (0, false),
+        ];
+        let mut triangles = Triangles::default();
+        let mut smooth = 0;
+        let mut expected = Vec::new();
+        for (k, &(material, is_smooth)) in pushed.iter().enumerate() {
+            let normals = is_smooth.then(|| [Vec3::splat(k as f32); 3]);
+            triangles.push(UNIT, normals, material);
+            if is_smooth {
+                expected.push(smooth);
+                smooth += 1;
+            } else {
+                expected.push(Triangles::FLAT);
+            }
+        }
+        assert_eq!(triangles.runs.len(), 7);
+        for (i, &(material, _)) in pushed.iter().enumerate() {
+            assert_eq!(triangles.material(i), material, "triangle {i}");
+            assert_eq!(triangles.shading(i), expected[i], "triangle {i}");
+        }
+        // The normals are each smooth triangle's own.
+        let n = triangles.normal(4, Vec3::ZERO, 0.2, 0.3, 0.0);
+        assert_eq!(n, Vec3::splat(1.0).normalize());
     }
 
     #[test]

@@ -141,7 +141,7 @@ fn mount_scenes_have_the_course_counts_and_spheres_clear_of_the_rock() {
     for (level, triangles) in [(1, 8), (5, 2048), (7, 32768)] {
         let scene = parse_text(&mount_scene(level, 0, None)).unwrap();
         let g = &scene.geometry;
-        assert_eq!(g.triangles.records.len(), triangles, "level {level}");
+        assert_eq!(g.triangles.corners.len(), triangles, "level {level}");
         assert_eq!(g.spheres.records.len(), 4);
         // The glass spheres float: every vertex below a sphere lies beneath its bottom.
         for s in 0..4 {
@@ -286,7 +286,7 @@ fn dragon_scene_places_a_gzipped_ply_model_on_the_floor() {
     let scene = parse_text(&dragon_scene(&mesh, "model.ply.gz", None)).unwrap();
     let t = &scene.geometry.triangles;
     // The floor square (two triangles) and the model's four.
-    assert_eq!(t.records.len(), 2 + 4);
+    assert_eq!(t.corners.len(), 2 + 4);
     assert_eq!(scene.mesh_triangles, 4);
     let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
     for i in 2..6 {

@@ -86,7 +86,7 @@ fn a_mesh_stores_its_vertices_once() {
     let t = &scene.geometry.triangles;
     // The third triangle's corners are in a line: a NaN vertex of its own, never hit.
     assert_eq!(t.positions.len(), 5 + 1);
-    assert_eq!(t.records[1].corners, [0, 2, 3]);
+    assert_eq!(t.corners[1], [0, 2, 3]);
     assert_eq!(
         t.vertices(1),
         [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::Y]
