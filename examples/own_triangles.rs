@@ -20,25 +20,30 @@ fn height(x: f32, z: f32) -> f32 {
 }
 
 fn main() {
-    // Two triangles a cell of a grid over [-1, 1] x [-1, 1], all of material 0.
+    // Two triangles a cell of a grid over [-1, 1] x [-1, 1], all of material 0: the
+    // grid's vertices stored once, each triangle as three of them.
     let mut geometry = Geometry::default();
-    let point = |i: usize, j: usize| {
+    let rows = CELLS + 1;
+    let point = |k: usize| {
+        let (i, j) = (k / rows, k % rows);
         let (x, z) = (
             i as f32 / CELLS as f32 * 2.0 - 1.0,
             j as f32 / CELLS as f32 * 2.0 - 1.0,
         );
         Vec3::new(x, height(x, z), z)
     };
+    let first = geometry.triangles.add_vertices((0..rows * rows).map(point));
+    let vertex = |i: usize, j: usize| first + (i * rows + j) as u32;
     for i in 0..CELLS {
         for j in 0..CELLS {
             let [a, b, c, d] = [
-                point(i, j),
-                point(i + 1, j),
-                point(i + 1, j + 1),
-                point(i, j + 1),
+                vertex(i, j),
+                vertex(i + 1, j),
+                vertex(i + 1, j + 1),
+                vertex(i, j + 1),
             ];
-            geometry.triangles.push([a, b, c], None, 0);
-            geometry.triangles.push([a, c, d], None, 0);
+            geometry.triangles.push_indexed([a, b, c], 0);
+            geometry.triangles.push_indexed([a, c, d], 0);
         }
     }
     let start = Instant::now();
