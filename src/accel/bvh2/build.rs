@@ -37,7 +37,18 @@ pub(in crate::accel) fn several_threads() -> bool {
 pub(super) struct Rules {
     pub build: BvhBuild,
     pub pack_leaves: usize,
+    /// Whether the SAH counts a side's primitives by the packs they fill
+    /// ([`PACKS_COUNTED_FROM`]), set by [`build`].
+    pub packs_counted: bool,
 }
+
+/// Trees for packs over at least this many primitives are split by the packs their sides
+/// fill: fuller packs (7.3 primitives a pack at `gen mount --level 10`, against 6.1) and a
+/// sixth fewer bytes, which pay where the tree outgrows the caches. `bench`, best paths,
+/// against counting primitives (Xeon, native, 2026-12-06): level 10 1.02-1.04, level 9
+/// 0.99-1.03; below, level 8 0.98-1.00, and the three benchmark scenes lost (dragon
+/// 0.96-0.98, balls_high 0.92-0.94): a pack read from the cache costs its primitives' tests.
+const PACKS_COUNTED_FROM: usize = 1 << 19;
 
 impl Rules {
     /// Whether `items` are left a leaf for a pack.
@@ -155,6 +166,10 @@ pub(super) fn build(
         }
     }
     items.retain(|it| !it.bounds.is_empty());
+    let rules = Rules {
+        packs_counted: rules.pack_leaves > 0 && items.len() >= PACKS_COUNTED_FROM,
+        ..rules
+    };
     let mut nodes = match items.is_empty() {
         true => Vec::new(),
         false => {
@@ -194,7 +209,14 @@ fn split_of(items: &mut [Item], boxes: &Boxes, depth: usize, rules: Rules) -> Op
     } else {
         match rules.build {
             BvhBuild::Midpoint => midpoint_split(items, &boxes.bounds).map(|k| Split::at(items, k)),
-            BvhBuild::Sah => sah_split(items, boxes),
+            BvhBuild::Sah => {
+                let pack = if rules.packs_counted {
+                    rules.pack_leaves
+                } else {
+                    0
+                };
+                sah_split(items, boxes, pack)
+            }
         }
     }
 }
@@ -336,7 +358,13 @@ fn boxed((min, max, _): Bin) -> Aabb {
 /// Binned SAH over the three axes: the cheapest split, or a leaf when that is cheaper
 /// and the items fit in one. Only the bins that items fall in are swept (most are empty
 /// in the many small nodes), which gives the costs, and so the split, of a sweep over all.
-fn sah_split(items: &mut [Item], boxes: &Boxes) -> Option<Split> {
+/// A side's primitives count by the packs of `pack` they fill where the build is for
+/// packs (`pack` above 0): a pack's test costs the same for one primitive as for eight.
+fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
+    let tests = |count: usize| match pack {
+        0 => count as f32,
+        _ => count.div_ceil(pack) as f32,
+    };
     let n = items.len();
     if n == 1 {
         return None;
@@ -413,7 +441,7 @@ fn sah_split(items: &mut [Item], boxes: &Boxes) -> Option<Split> {
             acc = add(acc, bins[full[j]]);
             let (left_box, (right_box, right_count)) = (boxed(acc), right[j + 1]);
             let cost = TRAVERSAL_COST
-                + (left_box.area() * acc.2 as f32 + right_box.area() * right_count as f32)
+                + (left_box.area() * tests(acc.2) + right_box.area() * tests(right_count))
                     / node_area;
             if best.as_ref().is_none_or(|b| cost < b.0) {
                 best = Some((cost, axis, full[j], left_box, right_box));
@@ -533,7 +561,7 @@ mod tests {
     fn sah_separates_clusters_and_keeps_small_tight_groups_whole() {
         let split = |items: &mut [Item]| {
             let boxes = Boxes::of(items);
-            sah_split(items, &boxes).map(|s| {
+            sah_split(items, &boxes, 0).map(|s| {
                 // The boxes found on the way are the boxes of the two sides.
                 assert_eq!(s.left, Boxes::of(&items[..s.k]));
                 assert_eq!(s.right, Boxes::of(&items[s.k..]));

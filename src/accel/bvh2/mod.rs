@@ -163,6 +163,7 @@ impl Bvh2 {
         let rules = build::Rules {
             build,
             pack_leaves: pack_size,
+            packs_counted: false,
         };
         let (nodes, prims) = build::build(geometry, rules, shutter, roots_margin);
         Bvh2 {
