@@ -586,25 +586,17 @@ pub fn triangle_packet(
     t_max: F32xP,
     active: LaneBits,
 ) -> PacketHits {
-    packet_hits(
-        query,
-        |i, axis| vertices[i][axis],
-        || trusted_triangle_box(vertices),
-        t_min,
-        t_max,
-        active,
-    )
+    packet_hits(query, |i, axis| vertices[i][axis], t_min, t_max, active)
 }
 
 /// [`triangle_packet`] for the triangle whose vertex `i` has the coordinate
-/// `coordinate(i, axis)` on `axis`, its trusted box made by `trusted`, only for a packet
-/// with candidates. A coordinate is read where it lies, on the axes the lanes take: from
-/// a pack, one broadcast each.
+/// `coordinate(i, axis)` on `axis`, its trusted box made from those vertices where a
+/// lane hits. A coordinate is read where it lies, on the axes the lanes take: from a
+/// pack, one broadcast each.
 #[inline(always)]
 fn packet_hits(
     query: &PacketQuery,
     coordinate: impl Fn(usize, usize) -> f32,
-    trusted: impl Fn() -> Option<Aabb>,
     t_min: F32xP,
     t_max: F32xP,
     active: LaneBits,
@@ -619,11 +611,11 @@ fn packet_hits(
     );
     if (hits.hit | exact).any() {
         let rays = query.packet;
-        let trusted = trusted().map_or(MaskP::from_bitmask(0), |b| {
-            BoxRays::new(rays).holds(b.min, b.max, t_min, hits.t)
-        });
         let vertex = |i| Vec3::new(coordinate(i, 0), coordinate(i, 1), coordinate(i, 2));
         let vertices = [vertex(0), vertex(1), vertex(2)];
+        let trusted = trusted_triangle_box(vertices).map_or(MaskP::from_bitmask(0), |b| {
+            BoxRays::new(rays).holds(b.min, b.max, t_min, hits.t)
+        });
         settle(&mut hits, trusted, exact, t_max, |k| {
             let lane = RayQuery::new(&rays.rays[k], t_min.lane(k), query.options);
             triangle_hit(&lane, vertices, t_max.lane(k))
@@ -883,7 +875,6 @@ impl LeafPack for Triangles {
         packet_hits(
             query,
             |i, axis| pack.vertices[i][axis].lane(slot),
-            || trusted_triangle_box(pack.slot(slot)),
             query.t_min_lanes(),
             t_max,
             active,

@@ -37,9 +37,9 @@ pub(in crate::accel) fn several_threads() -> bool {
 pub(super) struct Rules {
     pub build: BvhBuild,
     pub pack_leaves: usize,
-    /// Whether the SAH counts a side's primitives by the packs they fill
-    /// ([`PACKS_COUNTED_FROM`]), set by [`build`].
-    pub packs_counted: bool,
+    /// The pack size by which the SAH counts a side's primitives, 0 to count them one by
+    /// one ([`PACKS_COUNTED_FROM`]); set by [`build`].
+    pub sah_pack: usize,
 }
 
 /// Trees for packs over at least this many primitives are split by the packs their sides
@@ -167,7 +167,10 @@ pub(super) fn build(
     }
     items.retain(|it| !it.bounds.is_empty());
     let rules = Rules {
-        packs_counted: rules.pack_leaves > 0 && items.len() >= PACKS_COUNTED_FROM,
+        sah_pack: match items.len() >= PACKS_COUNTED_FROM {
+            true => rules.pack_leaves,
+            false => 0,
+        },
         ..rules
     };
     let mut nodes = match items.is_empty() {
@@ -209,14 +212,7 @@ fn split_of(items: &mut [Item], boxes: &Boxes, depth: usize, rules: Rules) -> Op
     } else {
         match rules.build {
             BvhBuild::Midpoint => midpoint_split(items, &boxes.bounds).map(|k| Split::at(items, k)),
-            BvhBuild::Sah => {
-                let pack = if rules.packs_counted {
-                    rules.pack_leaves
-                } else {
-                    0
-                };
-                sah_split(items, boxes, pack)
-            }
+            BvhBuild::Sah => sah_split(items, boxes, rules.sah_pack),
         }
     }
 }

@@ -163,7 +163,7 @@ impl Bvh2 {
         let rules = build::Rules {
             build,
             pack_leaves: pack_size,
-            packs_counted: false,
+            sah_pack: 0,
         };
         let (nodes, prims) = build::build(geometry, rules, shutter, roots_margin);
         Bvh2 {
