@@ -351,6 +351,21 @@ fn boxed((min, max, _): Bin) -> Aabb {
     }
 }
 
+/// Swaps items `k` and `i` (`k <= i`) field by field. `items.swap` copied an item through
+/// the stack as two overlapping 16-byte moves and read it back across both stores, which
+/// the store buffer cannot forward: perf put 12% of the split's samples on that stall.
+#[inline(always)]
+fn swap_items(items: &mut [Item], k: usize, i: usize) {
+    if k == i {
+        return;
+    }
+    let (low, high) = items.split_at_mut(i);
+    let (a, b) = (&mut low[k], &mut high[0]);
+    std::mem::swap(&mut a.bounds.min, &mut b.bounds.min);
+    std::mem::swap(&mut a.bounds.max, &mut b.bounds.max);
+    std::mem::swap(&mut a.prim, &mut b.prim);
+}
+
 /// Binned SAH over the three axes: the cheapest split, or a leaf when that is cheaper
 /// and the items fit in one. Only the bins that items fall in are swept (most are empty
 /// in the many small nodes), which gives the costs, and so the split, of a sweep over all.
@@ -458,7 +473,7 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
         let c = Vec3::from(centre);
         if bin(place[axis]) <= last_left {
             left_centroids = left_centroids.grow(c);
-            items.swap(i, k);
+            swap_items(items, k, i);
             k += 1;
         } else {
             right_centroids = right_centroids.grow(c);
