@@ -20,7 +20,7 @@ use glam::Vec3;
 
 use super::light::{emitters, Emitter, Receiver, DEFAULT_LIGHT_GRID};
 use super::sampler::{dim, Sample, SampleGrid, SampleRng};
-use super::skybox::Skybox;
+use super::skybox::{Skybox, Texel};
 use crate::accel::count::{Count, RayCounts, RayKind, Work};
 use crate::accel::{InsideAnswers, Tracer};
 use crate::intersect::{spawn_origin, Hits8, Rays8, Roots, SurfacePoint, SurfacePoint8};
@@ -468,6 +468,11 @@ impl<'a> Shader<'a> {
             None => self.scene.background,
         };
         colour * self.options.profile.background_factor(depth)
+    }
+
+    /// [`Shader::background`] of a ray of `depth` that sees `texel` of the skybox `sky`.
+    pub(super) fn sky_background(&self, sky: &Skybox, texel: Texel, depth: u32) -> Vec3 {
+        sky.colour(texel) * self.options.profile.background_factor(depth)
     }
 }
 

@@ -15,8 +15,9 @@ use crate::imaging::jpeg_scan;
 /// Face files in the order of [`Face`].
 pub const FACE_NAMES: [&str; 6] = ["right", "left", "top", "bottom", "front", "back"];
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Face {
+    #[default]
     Right = 0,
     Left = 1,
     Top = 2,
@@ -130,6 +131,12 @@ impl Skybox {
 
     /// The colour seen in direction `d` (need not be unit length).
     pub fn lookup(&self, d: Vec3) -> Vec3 {
+        self.colour(self.texel(d))
+    }
+
+    /// The texel seen in direction `d` (need not be unit length), as [`Skybox::lookup`]
+    /// finds it.
+    pub fn texel(&self, d: Vec3) -> Texel {
         let (face, sc, tc, m) = face_coordinates(d);
         let image = &self.faces[face as usize];
         let s = (sc / m + 1.0) / 2.0;
@@ -137,13 +144,32 @@ impl Skybox {
         let column = nearest(s, image.width);
         let row_from_bottom = nearest(t, image.height);
         let row = (image.height - 1 - row_from_bottom) as usize;
-        let i = 3 * (row * image.width as usize + column as usize);
-        Vec3::new(
-            image.rgb[i] as f32,
-            image.rgb[i + 1] as f32,
-            image.rgb[i + 2] as f32,
-        ) / 255.99
+        Texel {
+            face,
+            at: 3 * (row * image.width as usize + column as usize),
+        }
     }
+
+    /// Asks the cache for `texel`'s bytes, to be read soon ([`Skybox::colour`]).
+    pub fn prefetch(&self, texel: Texel) {
+        let rgb = &self.faces[texel.face as usize].rgb;
+        // Its first and last byte, which may lie on two lines.
+        crate::simd::prefetch(&rgb[texel.at]);
+        crate::simd::prefetch(&rgb[texel.at + 2]);
+    }
+
+    /// The colour of `texel`.
+    pub fn colour(&self, texel: Texel) -> Vec3 {
+        let (rgb, i) = (&self.faces[texel.face as usize].rgb, texel.at);
+        Vec3::new(rgb[i] as f32, rgb[i + 1] as f32, rgb[i + 2] as f32) / 255.99
+    }
+}
+
+/// A texel of a skybox: its face, and the place of its first byte there.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Texel {
+    face: Face,
+    at: usize,
 }
 
 /// Why a face's bytes are damaged, for a JPEG whose data [`jpeg_scan`] finds so.

@@ -57,6 +57,33 @@ fn every_mode_gives_the_scalar_image() {
     }
 }
 
+/// The stream reads the skybox's texels a batch at a time (`render::stream::blocks`):
+/// with the skybox on, every mode still gives the scalar image, rays leaving the
+/// showcase's glass and mirrors seeing it in all directions, at every depth and in either
+/// profile (whose factor for the background depends on the depth).
+#[test]
+fn every_mode_gives_the_scalar_image_with_the_skybox() {
+    let scene = parse_file(&common::project_file("scenes/showcase.p3f")).unwrap();
+    for profile in [Profile::Standard, Profile::Course] {
+        let [scalar, stream, plain] = [
+            (RenderMode::Scalar, true),
+            (RenderMode::Stream, true),
+            (RenderMode::Stream, false),
+        ]
+        .map(|(mode, skybox)| {
+            render_scene(&scene, |o| {
+                (o.width, o.height) = (61, 47);
+                o.sampling = Sampling::Jittered(SampleGrid::square(2));
+                o.mode = mode;
+                o.skybox = skybox;
+                o.shade = o.shade.with_profile(profile);
+            })
+        });
+        assert!(scalar != plain, "{profile:?}: the skybox was not seen");
+        assert!(scalar == stream, "{profile:?}: stream mode differs");
+    }
+}
+
 /// The course profile's textbook sphere roots reach every structure: brute force, the
 /// grid and both BVH widths give one image of the project's sphereflake.
 #[test]

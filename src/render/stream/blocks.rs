@@ -9,6 +9,7 @@ use bumpalo::Bump;
 use glam::Vec3;
 
 use super::super::shade::{Bounce8, Profile, Shader, EPS};
+use super::super::skybox::{Skybox, Texel};
 use super::answered_work;
 use super::queue::{push_reserved, ray_kind, slot, AnsweredRays, Queue, Seen};
 use super::queue::{ANSWERED, WALKED_REFLECTED, WALKED_TRANSMITTED};
@@ -191,6 +192,44 @@ impl HitBlock {
     }
 }
 
+/// Missed rays' skybox texels are read this many at a time: each is asked of the cache
+/// as its ray comes (the course's faces hold 12 MiB each, which rays leaving a glass read
+/// at random), and the colours are read once this many have come, so that their cache
+/// misses overlap rather than each stall the loop in turn.
+const SKY_READS: usize = 16;
+
+/// The texels of up to [`SKY_READS`] missed rays, and the places of their rays' colours.
+struct SkyReads {
+    seen: [usize; SKY_READS],
+    texels: [Texel; SKY_READS],
+    len: usize,
+}
+
+impl SkyReads {
+    fn new() -> Self {
+        SkyReads {
+            seen: [0; SKY_READS],
+            texels: [Texel::default(); SKY_READS],
+            len: 0,
+        }
+    }
+
+    /// Adds the ray whose colour is `seen[place]`, which sees `texel` of `sky`.
+    fn push(&mut self, sky: &Skybox, place: usize, texel: Texel) {
+        sky.prefetch(texel);
+        (self.seen[self.len], self.texels[self.len]) = (place, texel);
+        self.len += 1;
+    }
+
+    /// Writes the colours of the rays added, of `depth`, into `seen`.
+    fn read(&mut self, shader: &Shader, sky: &Skybox, depth: u32, seen: &mut ArenaVec<Seen>) {
+        for (&place, &texel) in self.seen.iter().zip(&self.texels).take(self.len) {
+            seen[place].colour = shader.sky_background(sky, texel, depth);
+        }
+        self.len = 0;
+    }
+}
+
 /// A depth's hits gathered into [`HitBlock`]s, in queue order.
 struct HitBlocks<'a> {
     blocks: ArenaVec<'a, HitBlock>,
@@ -232,6 +271,7 @@ impl<'a> HitBlocks<'a> {
         found: impl Iterator<Item = (&'r Ray, Option<Hit>)>,
         seen: &mut ArenaVec<Seen>,
     ) {
+        let mut sky_reads = SkyReads::new();
         for (j, (ray, hit)) in found.enumerate() {
             match hit {
                 Some(hit) => {
@@ -241,13 +281,26 @@ impl<'a> HitBlocks<'a> {
                     });
                     self.push(shader, slot(part, j), ray, hit);
                 }
-                None => {
-                    seen.push(Seen {
+                None => match shader.skybox {
+                    Some(sky) => {
+                        seen.push(Seen {
+                            colour: Vec3::ZERO,
+                            hit: false,
+                        });
+                        sky_reads.push(sky, seen.len() - 1, sky.texel(ray.dir));
+                        if sky_reads.len == SKY_READS {
+                            sky_reads.read(shader, sky, depth, seen);
+                        }
+                    }
+                    None => seen.push(Seen {
                         colour: shader.background(ray.dir, depth),
                         hit: false,
-                    });
-                }
+                    }),
+                },
             }
+        }
+        if let Some(sky) = shader.skybox {
+            sky_reads.read(shader, sky, depth, seen);
         }
     }
 
