@@ -431,7 +431,7 @@ impl<'p> PacketQuery<'p> {
                 time: packet.time.lane(k),
             },
             inv_dir: packet.inv_dir.lane(k),
-            t_min: self.packet.t_min,
+            t_min: packet.t_min,
             options: self.options,
         }
     }
