@@ -997,6 +997,10 @@ impl Shapes for Triangles {
             error,
             normal,
         };
+        // Without smooth triangles no lane is one: the runs are not searched eight times.
+        if self.vertex_normals.is_empty() {
+            return points;
+        }
         for (k, &i) in indices.iter().enumerate() {
             if self.shading(i) != Self::FLAT {
                 let scalar = self.surface_point(i, &rays[k], hits.t[k], hits.u[k], hits.v[k]);

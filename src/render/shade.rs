@@ -463,11 +463,10 @@ impl<'a> Shader<'a> {
 
     /// What a ray of `depth` along `dir` that hits nothing sees.
     pub(super) fn background(&self, dir: Vec3, depth: u32) -> Vec3 {
-        let colour = match self.skybox {
-            Some(sky) => sky.lookup(dir),
-            None => self.scene.background,
-        };
-        colour * self.options.profile.background_factor(depth)
+        match self.skybox {
+            Some(sky) => self.sky_background(sky, sky.texel(dir), depth),
+            None => self.scene.background * self.options.profile.background_factor(depth),
+        }
     }
 
     /// [`Shader::background`] of a ray of `depth` that sees `texel` of the skybox `sky`.
