@@ -11,9 +11,9 @@ const CELLS: [u32; 2] = [2500, 2000];
 const TRIANGLES: usize = 10_000_000;
 
 /// The most heap a triangle may take at the peak of storing, building the default BVH and
-/// rendering (71.5 measured, `docs/limits.md`: at the end of the collapse, 18 for the
+/// rendering (71.3 measured, `docs/limits.md`: at the end of the collapse, 18 for the
 /// mesh, 4 for the primitive order, 48 for the 8-wide tree and its packs, and 2 for the
-/// list of packs to fill; 66.0 held once built, the order freed).
+/// list of packs to fill; 65.8 held once built, the order freed).
 const MAX_BYTES_PER_TRIANGLE: f64 = 100.0;
 
 /// A gentle landscape, so that the SAH has shapes to split.

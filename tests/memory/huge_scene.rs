@@ -14,7 +14,7 @@ const SPHERES: usize = 10_000_000;
 /// The most heap a sphere may take at the peak of storing, building the default BVH and
 /// rendering, as `docs/limits.md` states it (64.4 measured, at the end of the binary build:
 /// 20 for the sphere records, 28 for the build's items and 16 for the binary nodes, built
-/// down to the packs, twice as the root's halves are copied; once built, 48.2, the 8-wide
+/// down to the packs, twice as the root's halves are copied; once built, 47.5, the 8-wide
 /// tree taking 28).
 const MAX_BYTES_PER_SPHERE: f64 = 70.0;
 
