@@ -48,9 +48,10 @@ const fn stack_size(depth: usize) -> usize {
     (WIDTH - 1) * depth + 1
 }
 
-/// Trees at most this deep (the course scenes' are 5 to 8) walk with stacks sized for them,
-/// a few KiB: a walk's frame with the deepest tree's stack was 9 KiB, and a profiler's copy
-/// of the call stack (16 KiB in `render-profile`) then missed the render loop above it.
+/// Trees at most this deep (the course scenes' have 1 to 10 levels) walk with stacks sized
+/// for them, a few KiB: a walk's frame with the deepest tree's stack was 9 KiB, and a
+/// profiler's copy of the call stack (16 KiB in `render-profile`) then missed the render
+/// loop above it.
 const SHALLOW_DEPTH: usize = 32;
 /// Deeper trees, which only contrived scenes make, walk with stacks sized for the deepest:
 /// the binary trees stay under `bvh2::MAX_DEPTH` levels, which bounds the collapsed ones.
