@@ -311,15 +311,14 @@ impl Binary<'_> {
     fn emit(&self, over: Kid, tree: &mut Subtree) -> usize {
         let kids = self.expand(over);
         let index = tree.nodes.len();
-        let boxes: Vec<(Vec3, Vec3)> = kids
-            .iter()
-            .map(|kid| {
-                let b = self.nodes[kid.node].bounds();
-                (b.min, b.max)
-            })
-            .collect();
+        // On the stack: one allocation a node fewer.
+        let mut boxes = [(Vec3::ZERO, Vec3::ZERO); WIDTH];
+        for (slot, kid) in boxes.iter_mut().zip(&kids) {
+            let b = self.nodes[kid.node].bounds();
+            *slot = (b.min, b.max);
+        }
         tree.nodes.push(Node8 {
-            boxes: BoxPack8::new(&boxes),
+            boxes: BoxPack8::new(&boxes[..kids.len()]),
             child: [0; WIDTH],
             count: kids.len() as u32,
         });
