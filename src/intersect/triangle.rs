@@ -801,6 +801,10 @@ impl Triangles {
     /// otherwise.
     #[inline]
     pub fn shading(&self, i: usize) -> u32 {
+        // Without smooth triangles none is one: no run is searched.
+        if self.vertex_normals.is_empty() {
+            return Self::FLAT;
+        }
         let run = self.run(i);
         match run.normals {
             Self::FLAT => Self::FLAT,
@@ -997,10 +1001,6 @@ impl Shapes for Triangles {
             error,
             normal,
         };
-        // Without smooth triangles no lane is one: the runs are not searched eight times.
-        if self.vertex_normals.is_empty() {
-            return points;
-        }
         for (k, &i) in indices.iter().enumerate() {
             if self.shading(i) != Self::FLAT {
                 let scalar = self.surface_point(i, &rays[k], hits.t[k], hits.u[k], hits.v[k]);

@@ -384,6 +384,7 @@ impl Binary<'_> {
 mod tests {
     use super::*;
     use crate::accel::bvh8::node::{leaf_parts, LEAF};
+    use crate::intersect::Aabb;
     use crate::scene::p3f::parse_text;
 
     impl Bvh8 {
@@ -457,17 +458,14 @@ mod tests {
     /// The summed surface areas of `tree`'s nodes (each the union of its children's boxes).
     fn node_areas(tree: &Bvh8) -> f64 {
         let area = |node: &Node8| {
-            let lanes = 0..node.count as usize;
-            let min = lanes
-                .clone()
-                .map(|k| node.boxes.min.lane(k))
-                .reduce(Vec3::min);
-            let max = lanes.map(|k| node.boxes.max.lane(k)).reduce(Vec3::max);
-            crate::intersect::Aabb {
-                min: min.unwrap(),
-                max: max.unwrap(),
-            }
-            .area() as f64
+            let child = |k| {
+                let (min, max) = node.boxes.corners(k);
+                Aabb { min, max }
+            };
+            let union = (0..node.count as usize)
+                .map(child)
+                .fold(Aabb::EMPTY, Aabb::union);
+            union.area() as f64
         };
         tree.nodes.iter().map(area).sum()
     }
