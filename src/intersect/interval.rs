@@ -307,7 +307,8 @@ impl BoxRays {
 /// distance `(min - o) * inv` is at least `(min - o_hi) * inv` (rounding is monotone),
 /// which is at least the smaller of its products with the two ends of the inverse
 /// directions' range; the exit and negative axes likewise. So a traversal may skip the
-/// boxes it rejects for every lane, and test the lanes of the rest one by one.
+/// boxes it rejects for every lane, and test the lanes of the rest one by one; and the
+/// range's entry into a box, the largest of those bounds, lies below every lane's.
 #[derive(Clone, Copy, Debug)]
 pub struct RayRange {
     /// Per axis, the origin that gives the smallest entry distance (the largest origin
@@ -362,9 +363,10 @@ impl RayRange {
     }
 
     /// Whether any of the rays may be inside the box `[min, max]` (with `min <= max`)
-    /// within `[t_min, t_max]`, `t_max` the largest of the lanes'.
+    /// within `[t_min, t_max]`, `t_max` the largest of the lanes': if so, a bound that
+    /// no lane's entry ([`BoxRays::interval`]) lies below.
     #[inline]
-    pub fn enters(&self, min: Vec3, max: Vec3, t_min: f32, t_max: f32) -> bool {
+    pub fn entry(&self, min: Vec3, max: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
         let mut entry = t_min;
         let mut exit = t_max;
         for k in 0..3 {
@@ -374,13 +376,14 @@ impl RayRange {
             entry = greater(lesser(a * self.inv_lo[k], a * self.inv_hi[k]), entry);
             exit = lesser(greater(b * self.inv_lo[k], b * self.inv_hi[k]), exit);
         }
-        entry <= widen_exit(exit)
+        (entry <= widen_exit(exit)).then_some(entry)
     }
 
-    /// [`RayRange::enters`] for the eight boxes of a pack, as a bit mask (padding slots
-    /// may be set: the caller masks them out).
+    /// [`RayRange::entry`] for the eight boxes of a pack: the boxes entered as a bit mask
+    /// (padding slots may be set: the caller masks them out), and their entry bounds
+    /// (unspecified in the other slots).
     #[inline]
-    pub fn enters8(&self, boxes: &BoxPack8, t_min: f32, t_max: f32) -> u8 {
+    pub fn entries8(&self, boxes: &BoxPack8, t_min: f32, t_max: f32) -> (u8, [f32; 8]) {
         let mut entry = F32x8::splat(t_min);
         let mut exit = F32x8::splat(t_max);
         let axes = [
@@ -396,7 +399,7 @@ impl RayRange {
             entry = (a * lo).min(a * hi).max(entry);
             exit = (b * lo).max(b * hi).min(exit);
         }
-        entry.le(widen_exit_lanes(exit)).bitmask()
+        (entry.le(widen_exit_lanes(exit)).bitmask(), entry.to_array())
     }
 }
 

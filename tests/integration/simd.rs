@@ -702,7 +702,8 @@ proptest! {
 
     /// A packet's `RayRange` (its traceable active lanes, as a traversal makes it) never
     /// rejects a box that the box test lets one of those lanes into: the range may only
-    /// cull boxes every lane misses.
+    /// cull boxes every lane misses. Its entry lies below every such lane's, so that a
+    /// walk sorting and skipping by it keeps every box a lane needs.
     #[test]
     fn ray_range_keeps_every_box_a_lane_enters(
         p in coherent_packet(),
@@ -712,7 +713,8 @@ proptest! {
         let lanes = active & rays.traceable();
         let t_min = F32xP::splat(p.t_min[0]);
         let box_rays = BoxRays::new(&rays);
-        let entered = box_rays.interval(lo, hi, t_min, t_max).hit.bitmask() & lanes;
+        let intervals = box_rays.interval(lo, hi, t_min, t_max);
+        let entered = intervals.hit.bitmask() & lanes;
         let Some(range) = box_rays.range(lanes) else {
             // Only lanes of mixed signs, or none, have no range.
             prop_assert!(lanes == 0 || !same_signs(&p, lanes));
@@ -722,13 +724,19 @@ proptest! {
             .filter(|&k| lanes.has(k))
             .fold(f32::NEG_INFINITY, |m, k| m.max(p.t_max[k]));
         if entered != 0 {
-            prop_assert!(range.enters(lo, hi, p.t_min[0], largest), "lanes {entered:b} enter");
+            let entry = range.entry(lo, hi, p.t_min[0], largest);
+            prop_assert!(entry.is_some(), "lanes {entered:b} enter");
+            let entries = intervals.entry.to_array();
+            for k in (0..PACKET).filter(|&k| entered.has(k)) {
+                prop_assert!(entry.unwrap() <= entries[k], "lane {k} enters at {}", entries[k]);
+            }
         }
     }
 
-    /// `RayRange::enters8` answers each slot as `RayRange::enters`, padding and odd boxes included.
+    /// `RayRange::entries8` answers each slot as `RayRange::entry`, bit for bit, padding
+    /// and odd boxes included.
     #[test]
-    fn ray_range_enters8_equals_scalar(
+    fn ray_range_entries8_equals_scalar(
         p in coherent_packet(),
         boxes in prop::collection::vec(aabb(), 0..=8),
         (t_min, t_max) in interval(),
@@ -738,10 +746,14 @@ proptest! {
             return Ok(());
         };
         let pack = BoxPack8::new(&boxes);
-        let lanes = range.enters8(&pack, t_min, t_max);
-        for k in 0..8 {
+        let (lanes, entries) = range.entries8(&pack, t_min, t_max);
+        for (k, lane_entry) in entries.into_iter().enumerate() {
             let (lo, hi) = boxes.get(k).copied().unwrap_or((BoxPack8::PAD, BoxPack8::PAD));
-            prop_assert_eq!(lanes >> k & 1 == 1, range.enters(lo, hi, t_min, t_max), "slot {}", k);
+            let scalar = range.entry(lo, hi, t_min, t_max);
+            prop_assert_eq!(lanes >> k & 1 == 1, scalar.is_some(), "slot {}", k);
+            if let Some(entry) = scalar {
+                prop_assert_eq!(lane_entry.to_bits(), entry.to_bits(), "slot {}", k);
+            }
         }
     }
 

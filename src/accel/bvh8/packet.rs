@@ -8,7 +8,7 @@
 //! lanes at once, by the primitives' packet kernels, rather than each lane against all
 //! eight slots of the pack.
 
-use super::node::{ChildRef, Node8, LEAF};
+use super::node::{ChildRef, Node8, LEAF, WIDTH};
 use super::Bvh8;
 use crate::accel::count::{Count, CountLanes};
 use crate::accel::hit::ClosestHit;
@@ -23,9 +23,8 @@ const SINGLE_RAY_LANES: u32 = 2;
 impl Bvh8 {
     /// The closest hits of the active lanes of `query`'s packet, traced together: each
     /// node's children are tested against all the packet's rays at once, visited nearest
-    /// first (by the nearest lane's entry) with their lanes and that
-    /// entry on the stack. An entry is skipped when it lies beyond every lane's closest
-    /// hit; a subtree left with few lanes is finished one ray at a time. Each lane's
+    /// first (by an entry no lane's lies below) with their lanes and that entry on the
+    /// stack. An entry is skipped when it lies beyond every lane's closest hit; a subtree left with few lanes is finished one ray at a time. Each lane's
     /// answer is the one single-ray walk ([`Bvh8::closest_from`]) gives.
     pub(super) fn packet_closest<C: Count, const STACK: usize>(
         &self,
@@ -91,22 +90,29 @@ impl Bvh8 {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let candidates = candidates(node, range.as_ref(), t_min, range_limit);
+            let (candidates, range_entries) = candidates(node, range.as_ref(), t_min, range_limit);
             count.node(lanes);
             count.boxes(lanes, candidates.count_ones());
             let kept = MaskP::from_bitmask(lanes);
-            // (child, its lanes, the nearest lane's entry) for the children entered, sorted
-            // on the stack with the nearest on top to be popped next.
+            // (child, its lanes, their entry) for the children entered, sorted on the stack
+            // with the nearest on top to be popped next. The entry is the range's bound
+            // where the packet has a range, which costs no reduction over the lanes (the
+            // nearest lane's entry, where it has none: primary packets 1.03-1.05 times as
+            // fast, the others level).
             let floor = stack.len();
             for_lanes(candidates, |c| {
                 let (min, max) = node.boxes.corners(c);
                 let intervals = box_rays.interval(min, max, lanes_t_min, limit);
                 let hit = intervals.hit & kept;
                 if hit.any() {
-                    let nearest = hit.select(intervals.entry, F32xP::splat(f32::INFINITY));
+                    let entry = match &range_entries {
+                        Some(entries) => entries[c],
+                        None => hit
+                            .select(intervals.entry, F32xP::splat(f32::INFINITY))
+                            .min_lane(),
+                    };
                     self.prefetch_child(node.child[c], true);
-                    let entry = (node.child[c], hit.bitmask(), nearest.min_lane());
-                    stack.push_sorted(floor, entry, |e| e.2);
+                    stack.push_sorted(floor, (node.child[c], hit.bitmask(), entry), |e| e.2);
                 }
             });
         }
@@ -177,7 +183,7 @@ impl Bvh8 {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let candidates = candidates(node, range.as_ref(), t_min, range_limit);
+            let candidates = candidates(node, range.as_ref(), t_min, range_limit).0;
             count.node(lanes);
             count.boxes(lanes, candidates.count_ones());
             for_lanes(candidates, |c| {
@@ -221,10 +227,20 @@ fn largest(t: F32xP, lanes: LaneBits) -> f32 {
 }
 
 /// The used children of `node` that some ray of `range` may enter (all of them without
-/// a range), as a bit mask: the children left to test lane by lane.
-fn candidates(node: &Node8, range: Option<&RayRange>, t_min: f32, t_max: f32) -> u8 {
+/// a range), as a bit mask: the children left to test lane by lane; with a range, the
+/// bounds below their lanes' entries ([`RayRange::entries8`]).
+fn candidates(
+    node: &Node8,
+    range: Option<&RayRange>,
+    t_min: f32,
+    t_max: f32,
+) -> (u8, Option<[f32; WIDTH]>) {
     let used = ((1u32 << node.count) - 1) as u8;
-    range.map_or(used, |range| {
-        range.enters8(&node.boxes, t_min, t_max) & used
-    })
+    match range {
+        Some(range) => {
+            let (entered, entries) = range.entries8(&node.boxes, t_min, t_max);
+            (entered & used, Some(entries))
+        }
+        None => (used, None),
+    }
 }
