@@ -2,7 +2,7 @@
 //! SAH. Both write nodes depth first, a large subtree's halves on two threads, and reorder
 //! the primitives so that each leaf's are contiguous.
 
-use glam::{Vec3, Vec3A};
+use glam::Vec3A;
 
 use super::{BvhBuild, Node, TRAVERSAL_COST};
 use crate::accel::bounds::prim_bounds;
@@ -386,10 +386,11 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
     // An item's bin on each axis, the three side by side in the lanes of a vector: where
     // its centroid falls, and the centroid itself. The binning and the partition below
     // both ask it, so that an item goes to the side of its bin.
-    let (low, size) = (Vec3A::from(centroids.min), Vec3A::from(extent));
+    let low = Vec3A::from(centroids.min);
+    let scale = BINS as f32 / Vec3A::from(extent);
     let place_of = |bounds: &Aabb| {
         let centre = 0.5 * (Vec3A::from(bounds.min) + Vec3A::from(bounds.max));
-        ((centre - low) / size * BINS as f32, centre)
+        ((centre - low) * scale, centre)
     };
     let bin = |place: f32| (place as usize).min(BINS - 1);
     // Every axis's bins in one pass over the items; the boxes' unions are exact (an axis
@@ -466,19 +467,31 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
     if n <= MAX_LEAF && cost >= n as f32 {
         return None;
     }
-    // The items in place, each side's centroids gathered on the way.
-    let (mut k, mut left_centroids, mut right_centroids) = (0, Aabb::EMPTY, Aabb::EMPTY);
+    // The items in place, each side's centroids gathered on the way (as vectors: the
+    // boxes of `Vec3` blend their fourth lane at each step), each item's side from its
+    // place on `axis` alone, computed as the binning computed it.
+    let (low, scale) = (low[axis], scale[axis]);
+    let mut k = 0;
+    let (mut left_min, mut left_max) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+    let (mut right_min, mut right_max) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
     for i in 0..n {
-        let (place, centre) = place_of(&items[i].bounds);
-        let c = Vec3::from(centre);
-        if bin(place[axis]) <= last_left {
-            left_centroids = left_centroids.grow(c);
+        let bounds = &items[i].bounds;
+        let centre = 0.5 * (Vec3A::from(bounds.min) + Vec3A::from(bounds.max));
+        let on_axis = 0.5 * (bounds.min[axis] + bounds.max[axis]);
+        if bin((on_axis - low) * scale) <= last_left {
+            (left_min, left_max) = (left_min.min(centre), left_max.max(centre));
             swap_items(items, k, i);
             k += 1;
         } else {
-            right_centroids = right_centroids.grow(c);
+            (right_min, right_max) = (right_min.min(centre), right_max.max(centre));
         }
     }
+    let boxed = |min: Vec3A, max: Vec3A| Aabb {
+        min: min.into(),
+        max: max.into(),
+    };
+    let (left_centroids, right_centroids) =
+        (boxed(left_min, left_max), boxed(right_min, right_max));
     Some(Split {
         k,
         left: Boxes {
