@@ -384,8 +384,8 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
     let extent = centroids.extent();
     let node_area = boxes.bounds.area().max(f32::MIN_POSITIVE);
     // An item's bin on each axis, the three side by side in the lanes of a vector: where
-    // its centroid falls, and the centroid itself. The binning and the partition below
-    // both ask it, so that an item goes to the side of its bin.
+    // its centroid falls, and the centroid itself. The partition below computes the lane
+    // of the split's axis as this does, so that an item goes to the side of its bin.
     let low = Vec3A::from(centroids.min);
     let scale = BINS as f32 / Vec3A::from(extent);
     let place_of = |bounds: &Aabb| {
@@ -470,7 +470,7 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
     // The items in place, each side's centroids gathered on the way (as vectors: the
     // boxes of `Vec3` blend their fourth lane at each step), each item's side from its
     // place on `axis` alone, computed as the binning computed it.
-    let (low, scale) = (low[axis], scale[axis]);
+    let (axis_low, axis_scale) = (low[axis], scale[axis]);
     let mut k = 0;
     let (mut left_min, mut left_max) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
     let (mut right_min, mut right_max) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
@@ -478,7 +478,7 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
         let bounds = &items[i].bounds;
         let centre = 0.5 * (Vec3A::from(bounds.min) + Vec3A::from(bounds.max));
         let on_axis = 0.5 * (bounds.min[axis] + bounds.max[axis]);
-        if bin((on_axis - low) * scale) <= last_left {
+        if bin((on_axis - axis_low) * axis_scale) <= last_left {
             (left_min, left_max) = (left_min.min(centre), left_max.max(centre));
             swap_items(items, k, i);
             k += 1;

@@ -24,8 +24,9 @@ impl Bvh8 {
     /// The closest hits of the active lanes of `query`'s packet, traced together: each
     /// node's children are tested against all the packet's rays at once, visited nearest
     /// first (by an entry no lane's lies below) with their lanes and that entry on the
-    /// stack. An entry is skipped when it lies beyond every lane's closest hit; a subtree left with few lanes is finished one ray at a time. Each lane's
-    /// answer is the one single-ray walk ([`Bvh8::closest_from`]) gives.
+    /// stack. An entry is skipped when it lies beyond every lane's closest hit; a subtree
+    /// left with few lanes is finished one ray at a time. Each lane's answer is the one
+    /// single-ray walk ([`Bvh8::closest_from`]) gives.
     pub(super) fn packet_closest<C: Count, const STACK: usize>(
         &self,
         geometry: &Geometry,
@@ -95,10 +96,9 @@ impl Bvh8 {
             count.boxes(lanes, candidates.count_ones());
             let kept = MaskP::from_bitmask(lanes);
             // (child, its lanes, their entry) for the children entered, sorted on the stack
-            // with the nearest on top to be popped next. The entry is the range's bound
-            // where the packet has a range, which costs no reduction over the lanes (the
-            // nearest lane's entry, where it has none: primary packets 1.03-1.05 times as
-            // fast, the others level).
+            // with the nearest on top to be popped next. The entry is the range's bound,
+            // found for all eight children at once, where the packet has a range; the
+            // nearest lane's, a reduction over the lanes for each child, where it has none.
             let floor = stack.len();
             for_lanes(candidates, |c| {
                 let (min, max) = node.boxes.corners(c);
