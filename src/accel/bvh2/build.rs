@@ -467,31 +467,24 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
     if n <= MAX_LEAF && cost >= n as f32 {
         return None;
     }
-    // The items in place, each side's centroids gathered on the way (as vectors: the
-    // boxes of `Vec3` blend their fourth lane at each step), each item's side from its
-    // place on `axis` alone, computed as the binning computed it.
+    // The items in place, each side's centroids gathered on the way as a bin's box (in
+    // vectors: the boxes of `Vec3` blend their fourth lane at each step), each item's side
+    // from its place on `axis` alone, computed as the binning computed that lane.
     let (axis_low, axis_scale) = (low[axis], scale[axis]);
-    let mut k = 0;
-    let (mut left_min, mut left_max) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
-    let (mut right_min, mut right_max) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+    let (mut k, mut left, mut right) = (0, EMPTY_BIN, EMPTY_BIN);
     for i in 0..n {
         let bounds = &items[i].bounds;
         let centre = 0.5 * (Vec3A::from(bounds.min) + Vec3A::from(bounds.max));
         let on_axis = 0.5 * (bounds.min[axis] + bounds.max[axis]);
         if bin((on_axis - axis_low) * axis_scale) <= last_left {
-            (left_min, left_max) = (left_min.min(centre), left_max.max(centre));
+            left = add(left, (centre, centre, 1));
             swap_items(items, k, i);
             k += 1;
         } else {
-            (right_min, right_max) = (right_min.min(centre), right_max.max(centre));
+            right = add(right, (centre, centre, 1));
         }
     }
-    let boxed = |min: Vec3A, max: Vec3A| Aabb {
-        min: min.into(),
-        max: max.into(),
-    };
-    let (left_centroids, right_centroids) =
-        (boxed(left_min, left_max), boxed(right_min, right_max));
+    let (left_centroids, right_centroids) = (boxed(left), boxed(right));
     Some(Split {
         k,
         left: Boxes {
