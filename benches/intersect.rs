@@ -8,7 +8,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
 use p3trace::intersect::{
-    self, BoxPack8, BoxRay, BoxRays, IntersectOptions, PacketQuery, Roots, SpherePack8,
+    self, BoxPack8, BoxRay, BoxRays, IntersectOptions, MeshPack8, PacketQuery, Roots, SpherePack8,
     TrianglePack8,
 };
 use p3trace::ray::{Ray, RayPacket};
@@ -175,6 +175,27 @@ fn leaves(c: &mut Criterion) {
                 .map(|&triangle| intersect::triangle(ray, triangle, 0.0, inf))
                 .fold(inf, |best, h| h.map_or(best, |h| h.t.min(best)))
         })
+    });
+    // A strip of a mesh, as a mesh pack holds it: eight triangles over ten vertices.
+    let vertex = |i: usize, top: bool| {
+        Vec3::new(0.5 * i as f32 - 1.0, if top { 1.0 } else { -1.0 }, i as f32)
+    };
+    let strip: Vec<[Vec3; 3]> = (0..4)
+        .flat_map(|i| {
+            let (b0, b1) = (vertex(i, false), vertex(i + 1, false));
+            let (t0, t1) = (vertex(i, true), vertex(i + 1, true));
+            [[b0, b1, t0], [b1, t1, t0]]
+        })
+        .collect();
+    let (strip_pack, mesh_pack) = (
+        TrianglePack8::new(&strip),
+        MeshPack8::new(&strip).expect("ten vertices fit a mesh pack"),
+    );
+    c.bench_function("leaf/triangle strip/simd", |b| {
+        b.iter(|| intersect::triangle_leaf(black_box(&ray), &strip_pack, 0.0, inf))
+    });
+    c.bench_function("leaf/mesh strip/simd", |b| {
+        b.iter(|| intersect::mesh_leaf(black_box(&ray), &mesh_pack, 0.0, inf))
     });
     c.bench_function("leaf/box/simd", |b| {
         b.iter(|| intersect::aabb_leaf(black_box(&ray), inv_dir, &box_pack, 0.0, inf))

@@ -13,6 +13,9 @@
 //! or `packet8` forces one (`build.rs` says which as the `cfg` `packet16`). A node's eight
 //! children and a leaf's pack of eight stay eight lanes at every width.
 //!
+//! [`Codes8`] picks eight lanes from a table of twelve floats (a compact leaf pack's
+//! shared vertices) by a permute.
+//!
 //! Every operation is IEEE-exact lane by lane (`+ - * /` and `sqrt` are correctly
 //! rounded, as their scalar counterparts are) and nothing here fuses a multiply with an
 //! add: the kernels must equal their scalar twins bit for bit, and `mul_add` rounds once
@@ -159,6 +162,111 @@ pub fn for_lanes<B: Bits>(mut mask: B, mut f: impl FnMut(usize)) {
         f(mask.lowest());
         mask = mask.drop_lowest();
     }
+}
+
+/// Entries of a [`Codes8::lookup`] table: the distinct vertices of a leaf pack of eight
+/// triangles, which a mesh's packs share (nine to eleven, most of them).
+pub const TABLE: usize = 12;
+
+/// How a lane names entry `entry` of a table of [`TABLE`]: entries 0 to 7 as themselves,
+/// 8 to 11 as 12 to 15. Bit 3 then picks the table's last eight floats (entries 4 to
+/// 11), and the low three bits a float of the eight it picks: the form of `vpermt2ps` and
+/// `vpermps`, with no bounds to check.
+pub const fn table_code(entry: usize) -> u8 {
+    assert!(entry < TABLE, "a table holds 12 entries");
+    if entry < 8 {
+        entry as u8
+    } else {
+        entry as u8 + 4
+    }
+}
+
+/// The entry that [`table_code`] names by `code`.
+#[inline(always)]
+pub const fn table_entry(code: u8) -> usize {
+    (if code < 8 { code } else { code - 4 }) as usize
+}
+
+/// Eight lanes' codes ([`table_code`]), widened once for the tables they read.
+#[derive(Clone, Copy, Debug)]
+pub struct Codes8([u32; 8]);
+
+impl Codes8 {
+    /// The codes `codes`, which [`table_code`] made.
+    #[inline(always)]
+    pub fn new(codes: &[u8; 8]) -> Self {
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+        // SAFETY: the load reads the eight bytes of `codes`, and the build enables the
+        // instruction (`cfg`); one `vpmovzxbd`, where the compiler widened each by shifts.
+        unsafe {
+            use std::arch::x86_64::*;
+            let wide = _mm256_cvtepu8_epi32(_mm_loadl_epi64(codes.as_ptr().cast()));
+            Codes8(std::mem::transmute::<__m256i, [u32; 8]>(wide))
+        }
+        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+        Codes8(codes.map(u32::from))
+    }
+
+    /// Lane `k`: lane `code k` of `low` (entries 0 to 7 of a table) for the codes
+    /// below 8, else lane `code k - 8` of `high` (its entries 4 to 11); by one `vpermt2ps`
+    /// with AVX-512, two `vpermps` and a blend with AVX2. Scalar twin: [`Codes8::pick_lanes`].
+    #[inline(always)]
+    pub fn pick(&self, low: F32x8, high: F32x8) -> F32x8 {
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx512vl"))]
+        // SAFETY: the loads read the arrays they are given, and the build enables the
+        // instructions (`cfg`).
+        unsafe {
+            use std::arch::x86_64::*;
+            let codes = _mm256_loadu_si256(self.0.as_ptr().cast());
+            let low = _mm256_loadu_ps(low.to_array().as_ptr());
+            let high = _mm256_loadu_ps(high.to_array().as_ptr());
+            let lanes = _mm256_permutex2var_ps(low, codes, high);
+            F32x8::from_array(std::mem::transmute::<__m256, [f32; 8]>(lanes))
+        }
+        #[cfg(all(
+            target_arch = "x86_64",
+            target_feature = "avx2",
+            not(target_feature = "avx512vl")
+        ))]
+        // SAFETY: as above.
+        unsafe {
+            use std::arch::x86_64::*;
+            let codes = _mm256_loadu_si256(self.0.as_ptr().cast());
+            let low = _mm256_permutevar8x32_ps(_mm256_loadu_ps(low.to_array().as_ptr()), codes);
+            let high = _mm256_permutevar8x32_ps(_mm256_loadu_ps(high.to_array().as_ptr()), codes);
+            // Bit 3 of a code, moved to the sign bit, picks the high lanes.
+            let pick_high = _mm256_castsi256_ps(_mm256_slli_epi32::<28>(codes));
+            let lanes = _mm256_blendv_ps(low, high, pick_high);
+            F32x8::from_array(std::mem::transmute::<__m256, [f32; 8]>(lanes))
+        }
+        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+        self.pick_lanes(low, high)
+    }
+
+    /// [`Codes8::pick`] one lane at a time.
+    #[inline(always)]
+    pub fn pick_lanes(&self, low: F32x8, high: F32x8) -> F32x8 {
+        F32x8::from_fn(|k| match self.0[k] {
+            code @ 0..8 => low.lane(code as usize),
+            code => high.lane(code as usize - 8),
+        })
+    }
+
+    /// Lane `k`: `table[table_entry(code k)]` ([`Codes8::pick`] of its two halves).
+    #[inline(always)]
+    pub fn lookup(&self, table: &[f32; TABLE]) -> F32x8 {
+        let (low, high) = table_halves(table);
+        self.pick(low, high)
+    }
+}
+
+/// Entries 0 to 7 of `table`, and 4 to 11: the halves that [`Codes8::pick`] picks from.
+#[inline(always)]
+pub fn table_halves(table: &[f32; TABLE]) -> (F32x8, F32x8) {
+    let half = |start: usize| {
+        F32x8::from_array(table[start..start + 8].try_into().expect("eight entries"))
+    };
+    (half(0), half(4))
 }
 
 /// Asks the cache for every line holding `value`, to be read soon: a hint, which changes

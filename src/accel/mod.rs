@@ -33,8 +33,8 @@ use std::cell::OnceCell;
 use std::time::{Duration, Instant};
 
 use crate::intersect::{
-    beyond_lanes, holds_lanes8, intervals_lanes8, BoxPack8, IntersectOptions, PacketQuery,
-    RayQuery, Rays8,
+    beyond_lanes, holds_lanes8, intervals_lanes8, BoxPack8, IntersectOptions, PackLayout,
+    PacketQuery, RayQuery, Rays8,
 };
 use crate::prim::{PrimId, PrimKind};
 use crate::ray::{traceable_lanes, Hit, Ray, RayPacket};
@@ -54,6 +54,7 @@ pub use structure::Structure;
 /// The acceleration structure over a scene's bounded primitives: one variant per
 /// traversal engine.
 #[derive(Clone, Debug)]
+#[allow(clippy::large_enum_variant)]
 pub enum Accel {
     /// Every ray is tested against every primitive: the reference the others are checked
     /// against.
@@ -113,6 +114,9 @@ pub struct AccelOptions {
     /// What the profile chooses in the primitives' tests, which every query carries
     /// (`render` sets it from the shading profile).
     pub intersect: IntersectOptions,
+    /// The layout of the 8-wide BVH's leaf packs: compact (fewer bytes, more work) for
+    /// large scenes by default.
+    pub packs: PackLayout,
 }
 
 impl Default for AccelOptions {
@@ -125,6 +129,7 @@ impl Default for AccelOptions {
             mailbox: false,
             shutter: [0.0, 0.0],
             intersect: IntersectOptions::default(),
+            packs: PackLayout::Auto,
         }
     }
 }
@@ -157,10 +162,12 @@ impl Accel {
                 match options.bvh_width.unwrap_or(default_width(options.bvh)) {
                     BvhWidth::Two => Accel::Bvh2(Bvh2::build(geometry, build, shutter, margin)),
                     // A tree too large for the 8-wide encoding stays binary.
-                    BvhWidth::Eight => match Bvh8::build(geometry, build, shutter, margin) {
-                        Ok(bvh8) => Accel::Bvh8(bvh8),
-                        Err(bvh2) => Accel::Bvh2(bvh2),
-                    },
+                    BvhWidth::Eight => {
+                        match Bvh8::build(geometry, build, shutter, margin, options.packs) {
+                            Ok(bvh8) => Accel::Bvh8(bvh8),
+                            Err(bvh2) => Accel::Bvh2(bvh2),
+                        }
+                    }
                 }
             }
         }

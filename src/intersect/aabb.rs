@@ -11,8 +11,8 @@ use glam::Vec3;
 
 use super::{first_root_in, first_root_in_lanes};
 use super::{
-    Aabb, LeafPack, PacketHits, PacketQuery, RayQuery, ShapeHit, ShapeHit8, Shapes, SurfacePoint,
-    Vec3s,
+    Aabb, LeafPack, PackOf, PacketHits, PacketQuery, RayQuery, ShapeHit, ShapeHit8, Shapes,
+    SurfacePoint, Vec3s,
 };
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{F32x8, F32xP, Floats, LaneBits, Mask8, MaskP, Vec3Lanes, Vec3x8, Vec3xP};
@@ -189,18 +189,28 @@ pub struct Boxes {
 
 impl LeafPack for Boxes {
     type Pack = BoxPack8;
+    type Compact = BoxPack8;
+}
 
-    fn pack(&self, indices: impl Iterator<Item = usize>) -> BoxPack8 {
+impl PackOf<Boxes> for BoxPack8 {
+    fn pack(storage: &Boxes, indices: impl Iterator<Item = usize>) -> Option<BoxPack8> {
         let boxes: Vec<(Vec3, Vec3)> = indices
-            .map(|i| (self.min.get(i), self.max.get(i)))
+            .map(|i| (storage.min.get(i), storage.max.get(i)))
             .collect();
-        BoxPack8::new(&boxes)
+        Some(BoxPack8::new(&boxes))
     }
 
     #[inline]
     fn leaf<const FRAME: usize>(pack: &BoxPack8, query: &RayQuery, t_max: f32) -> ShapeHit8 {
         let (ray, inv_dir) = (&query.ray, query.inv_dir);
         ShapeHit8::at(aabb_leaf(ray, inv_dir, pack, query.t_min, t_max))
+    }
+
+    type Slots<'a> = &'a BoxPack8;
+
+    #[inline(always)]
+    fn slots(pack: &BoxPack8) -> &BoxPack8 {
+        pack
     }
 
     #[inline(always)]

@@ -52,6 +52,7 @@ mod aabb;
 mod bounds;
 mod cone;
 mod interval;
+mod mesh_pack;
 mod moving_sphere;
 mod plane;
 mod sphere;
@@ -64,6 +65,7 @@ pub use interval::{
     beyond, beyond_lanes, holds_lanes8, intervals_lanes8, widen_entry, widen_exit, BoxRay, BoxRays,
     Intervals, Intervals8, RayRange,
 };
+pub use mesh_pack::{mesh_leaf, MeshPack8};
 pub use moving_sphere::MovingSpheres;
 pub use plane::{plane, plane_packet, Planes};
 pub use sphere::{
@@ -313,29 +315,98 @@ pub struct IntersectOptions {
     pub roots_margin: f32,
 }
 
+/// The primitives in the first pack of a leaf that takes two ([`PackOf::continues`]):
+/// four triangles hold at most twelve vertices, which fit in a [`MeshPack8`].
+pub const CHAIN_HEAD: usize = 4;
+
 /// A kind whose primitives the 8-wide BVH stores side by side (`packed` in
-/// `prim_kinds!`): up to eight of them in a leaf's pack, tested against one ray by the
-/// kind's leaf kernel, or slot by slot against a packet by its packet kernel. Each slot's
-/// answer is the scalar test's ([`Shapes::intersect`]) bit for bit.
-pub trait LeafPack: Shapes {
-    /// Eight primitives side by side; unused slots are padding that no ray hits.
-    type Pack: Clone + Copy + std::fmt::Debug;
+/// `prim_kinds!`): up to eight of them in a leaf's pack ([`PackOf`]), tested against one
+/// ray by the pack's leaf kernel, or slot by slot against a packet by its packet kernel.
+/// Each slot's answer is the scalar test's ([`Shapes::intersect`]) bit for bit.
+pub trait LeafPack: Shapes + Sized {
+    /// The pack of the kind's leaves.
+    type Pack: PackOf<Self>;
+    /// A pack of fewer bytes, for more work, that large scenes take ([`LeafPack::Pack`]
+    /// where the kind has none).
+    type Compact: PackOf<Self>;
+    /// Whether the kind has a compact pack: the trees of the others hold none, and their
+    /// walks are compiled without it.
+    const HAS_COMPACT: bool = false;
+    /// The primitives of the kind from which a tree takes [`LeafPack::Compact`] packs
+    /// ([`PackLayout::Auto`]).
+    const COMPACT_FROM: usize = usize::MAX;
+}
 
-    /// The primitives `indices` (one to eight) as a pack.
-    fn pack(&self, indices: impl Iterator<Item = usize>) -> Self::Pack;
+/// Which packs a tree's leaves take ([`LeafPack`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PackLayout {
+    /// [`LeafPack::Compact`] for a kind of [`LeafPack::COMPACT_FROM`] primitives or more.
+    #[default]
+    Auto,
+    /// [`LeafPack::Pack`] always.
+    Full,
+    /// [`LeafPack::Compact`] for every kind that has one.
+    Compact,
+}
 
-    /// Whether [`LeafPack::leaf`]'s answer depends on `FRAME`.
+impl PackLayout {
+    /// Whether a tree over `count` primitives of the kind `K` takes compact packs (never
+    /// where the kind has none).
+    pub fn compact<K: LeafPack>(self, count: usize) -> bool {
+        K::HAS_COMPACT
+            && match self {
+                PackLayout::Auto => count >= K::COMPACT_FROM,
+                PackLayout::Full => false,
+                PackLayout::Compact => true,
+            }
+    }
+}
+
+/// Up to eight primitives of the storage `K` side by side, and their kernels; unused
+/// slots are padding that no ray hits.
+pub trait PackOf<K>: Clone + Copy + std::fmt::Debug {
+    /// The primitives `indices` (one to eight) of `storage` as a pack, or `None` where
+    /// they do not fit in one (the triangles of a [`MeshPack8`] share at most twelve
+    /// vertices).
+    fn pack(storage: &K, indices: impl Iterator<Item = usize>) -> Option<Self>;
+
+    /// Whether a pack may go on in the next one ([`PackOf::continues`]).
+    const CHAINS: bool = false;
+
+    /// Whether `pack` goes on in the next pack: the first [`CHAIN_HEAD`] primitives of a
+    /// leaf that does not fit in one pack, the next pack holding the rest.
+    #[inline(always)]
+    fn continues(_pack: &Self) -> bool {
+        false
+    }
+
+    /// `pack` marked as going on in the next one ([`PackOf::CHAINS`] packs alone).
+    fn continued(pack: Self) -> Self {
+        pack
+    }
+
+    /// Whether [`PackOf::leaf`]'s answer depends on `FRAME`.
     const FRAMED: bool = false;
 
     /// One ray against the eight slots of `pack`, within `(query.t_min, t_max)`. `FRAME`
     /// is the ray's frame ([`frame_of`]), which the triangle test specialises on and the
     /// other kinds ignore: a walk takes it once (`with_frame!`).
-    fn leaf<const FRAME: usize>(pack: &Self::Pack, query: &RayQuery, t_max: f32) -> ShapeHit8;
+    fn leaf<const FRAME: usize>(pack: &Self, query: &RayQuery, t_max: f32) -> ShapeHit8;
 
-    /// The primitive in slot `slot` of `pack` against the lanes `active` of `query`'s
-    /// packet, as [`Shapes::intersect_packet`] tests a primitive of the storage.
+    /// A pack as [`PackOf::slot_packet`] reads its slots: the pack itself, or what it
+    /// holds unpacked once for all its slots.
+    type Slots<'a>: Copy
+    where
+        Self: 'a;
+
+    /// `pack` as its slots are read ([`PackOf::Slots`]).
+    fn slots(pack: &Self) -> Self::Slots<'_>;
+
+    /// The primitive in slot `slot` of a pack (its [`PackOf::slots`]) against the lanes
+    /// `active` of `query`'s packet, as [`Shapes::intersect_packet`] tests a primitive of
+    /// the storage.
     fn slot_packet(
-        pack: &Self::Pack,
+        slots: Self::Slots<'_>,
         slot: usize,
         query: &PacketQuery,
         t_max: F32xP,

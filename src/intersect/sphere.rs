@@ -6,8 +6,8 @@ use glam::{DVec3, Vec3};
 
 use super::{first_root_in, first_root_in_lanes, holds_lanes8};
 use super::{
-    gamma, trusted_box, Aabb, BoxPack8, Hits8, IntersectOptions, LeafPack, PacketHits, PacketQuery,
-    RayQuery, Rays8, ShapeHit, ShapeHit8, Shapes, SurfacePoint, SurfacePoint8,
+    gamma, trusted_box, Aabb, BoxPack8, Hits8, IntersectOptions, LeafPack, PackOf, PacketHits,
+    PacketQuery, RayQuery, Rays8, ShapeHit, ShapeHit8, Shapes, SurfacePoint, SurfacePoint8,
 };
 
 use crate::ray::{Ray, RayPacket};
@@ -248,15 +248,17 @@ fn spheres_lanes8(
 
 impl LeafPack for Spheres {
     type Pack = SpherePack8;
+    type Compact = SpherePack8;
+}
 
-    fn pack(&self, indices: impl Iterator<Item = usize>) -> SpherePack8 {
+impl PackOf<Spheres> for SpherePack8 {
+    fn pack(storage: &Spheres, indices: impl Iterator<Item = usize>) -> Option<SpherePack8> {
         let spheres: Vec<(Vec3, f32)> = indices
-            .map(|i| (self.records[i].centre, self.records[i].radius))
+            .map(|i| (storage.records[i].centre, storage.records[i].radius))
             .collect();
-        SpherePack8::new(&spheres)
+        Some(SpherePack8::new(&spheres))
     }
 
-    /// The kernel's hits that lie in their sphere's trusted box (as [`Shapes::intersect`]).
     #[inline(always)]
     fn leaf<const FRAME: usize>(pack: &SpherePack8, query: &RayQuery, t_max: f32) -> ShapeHit8 {
         let roots = query.options.roots;
@@ -266,6 +268,13 @@ impl LeafPack for Spheres {
         }
         let trusted = trusted_sphere_boxes8(pack.centre, pack.radius, query.options);
         ShapeHit8::at((hit & query.holds8(trusted, t), t))
+    }
+
+    type Slots<'a> = &'a SpherePack8;
+
+    #[inline(always)]
+    fn slots(pack: &SpherePack8) -> &SpherePack8 {
+        pack
     }
 
     #[inline(always)]

@@ -50,8 +50,9 @@ use std::ops::{Mul, Sub};
 use glam::{DVec3, Vec3};
 
 use super::{
-    gamma, trusted_box, Aabb, BoxPack8, BoxRays, Hits8, IntersectOptions, LeafPack, PacketHits,
-    PacketQuery, RayQuery, ShapeHit, ShapeHit8, ShapeHits, Shapes, SurfacePoint, SurfacePoint8,
+    gamma, trusted_box, Aabb, BoxPack8, BoxRays, Hits8, IntersectOptions, LeafPack, MeshPack8,
+    PackOf, PacketHits, PacketQuery, RayQuery, ShapeHit, ShapeHit8, ShapeHits, Shapes,
+    SurfacePoint, SurfacePoint8,
 };
 use crate::ray::{Ray, RayPacket};
 use crate::simd::{
@@ -71,7 +72,7 @@ pub enum Axis {
 
 /// The frames a ray may take, by the axis its direction is longest along: that axis is the
 /// frame's `z`, and the next two, cyclically, its `x` and `y`.
-const FRAMES: [[Axis; 3]; 3] = [
+pub(super) const FRAMES: [[Axis; 3]; 3] = [
     [Axis::Y, Axis::Z, Axis::X],
     [Axis::Z, Axis::X, Axis::Y],
     [Axis::X, Axis::Y, Axis::Z],
@@ -119,7 +120,7 @@ impl Shear {
     /// The setup of `query`'s ray on the frame `axes`: with the axes constants (a walk's
     /// `FRAME`), its numbers and a pack's coordinates are read at fixed places.
     #[inline(always)]
-    fn on(query: &RayQuery, axes: [Axis; 3]) -> Self {
+    pub(super) fn on(query: &RayQuery, axes: [Axis; 3]) -> Self {
         let [x, y, z] = [axes[0] as usize, axes[1] as usize, axes[2] as usize];
         let (o, d): (&[f32; 3], &[f32; 3]) = (query.ray.origin.as_ref(), query.ray.dir.as_ref());
         let sz = query.inv_dir.as_ref()[z];
@@ -149,7 +150,7 @@ impl Shear {
     /// [`Shear::relative`] for eight points given per axis (`[x, y, z]`), read by the
     /// frame's axes.
     #[inline(always)]
-    fn relative8(&self, p: &[F32x8; 3]) -> Vec3x8 {
+    pub(super) fn relative8(&self, p: &[F32x8; 3]) -> Vec3x8 {
         let [x, y, z] = self.axes;
         let o = self.origin;
         Vec3x8 {
@@ -161,7 +162,7 @@ impl Shear {
 
     /// The shear's factors in every lane.
     #[inline(always)]
-    fn factors8(&self) -> [F32x8; 3] {
+    pub(super) fn factors8(&self) -> [F32x8; 3] {
         let f = self.factors;
         [F32x8::splat(f.x), F32x8::splat(f.y), F32x8::splat(f.z)]
     }
@@ -391,7 +392,20 @@ fn watertight_lanes<F: Floats>(
     asked: F::Mask,
 ) -> (ShapeHits<F>, F::Mask) {
     let sheared = |p: Vec3Lanes<F>| [p.x - sx * p.z, p.y - sy * p.z];
-    let (a2, b2, c2) = (sheared(a), sheared(b), sheared(c));
+    let corners = [sheared(a), sheared(b), sheared(c)];
+    watertight_sheared(corners, [a.z, b.z, c.z], sz, t_min, asked)
+}
+
+/// [`watertight_lanes`] from the vertices already sheared (`(x - sx z, y - sy z)` of each
+/// vertex relative to the origin on the frame's axes), their `z` and the factor `sz`.
+#[inline(always)]
+pub(super) fn watertight_sheared<F: Floats>(
+    [a2, b2, c2]: [[F; 2]; 3],
+    [az, bz, cz]: [F; 3],
+    sz: F,
+    t_min: F,
+    asked: F::Mask,
+) -> (ShapeHits<F>, F::Mask) {
     let [u, v, w] = [edge(b2, c2), edge(c2, a2), edge(a2, b2)];
     let zero = F::splat(0.0);
     // [`straddles`] by the least and the largest: `minps` and `maxps` keep the second
@@ -402,7 +416,7 @@ fn watertight_lanes<F: Floats>(
     let exact = inside & (least.eq(zero) | largest.eq(zero));
     let det = u + v + w;
     let inv_det = F::splat(1.0) / det;
-    let t = (u * a.z + v * b.z + w * c.z) * sz * inv_det;
+    let t = (u * az + v * bz + w * cz) * sz * inv_det;
     // The edge functions of a lane inside and not exact are all of one sign and none zero,
     // so the determinant is zero in none: finite is what is left to ask.
     let hits = ShapeHits {
@@ -426,7 +440,7 @@ pub fn triangle(ray: &Ray, vertices: [Vec3; 3], t_min: f32, t_max: f32) -> Optio
 /// The body of [`triangle`] for a query. Out of line, as [`triangle`] was: inlined, it
 /// grows `Geometry::intersect` for every kind (+0.4% on `bench balls_high`).
 #[inline(never)]
-fn triangle_hit(query: &RayQuery, vertices: [Vec3; 3], t_max: f32) -> Option<ShapeHit> {
+pub(super) fn triangle_hit(query: &RayQuery, vertices: [Vec3; 3], t_max: f32) -> Option<ShapeHit> {
     let hit = watertight(&Shear::of(query), vertices, query.t_min)?;
     if in_trusted_box(query, vertices, hit.t) {
         return (hit.t < t_max).then_some(hit);
@@ -490,7 +504,7 @@ fn refined(ray: &Ray, vertices: [Vec3; 3], t_min: f32, t_max: f32) -> Option<Sha
 /// `t_max`; the others, and the lanes `exact` (an edge function of zero), answered by
 /// `scalar(k)`, the scalar test of lane `k`.
 #[inline(always)]
-fn settle<F: Floats>(
+pub(super) fn settle<F: Floats>(
     hits: &mut ShapeHits<F>,
     trusted: F::Mask,
     exact: F::Mask,
@@ -532,7 +546,7 @@ fn scalar_lanes<F: Floats>(
 /// they are never hit.
 ///
 /// The slots' trusted boxes are made again from the vertices where a lane hits
-/// (`TrianglePack8::trusted`), not stored: stored, they took 24 more bytes a triangle
+/// (`trusted8`), not stored: stored, they took 24 more bytes a triangle
 /// and three more cache lines a pack for a test that only hits ask for.
 #[derive(Clone, Copy, Debug)]
 pub struct TrianglePack8 {
@@ -562,19 +576,19 @@ impl TrianglePack8 {
         let [p0, p1, p2] = &self.vertices;
         [vertex(p0), vertex(p1), vertex(p2)]
     }
+}
 
-    /// Each slot's trusted box, bit for bit as [`trusted_triangle_box`] makes it, valid in
-    /// the slots of the mask that single precision can hit (a slot with a NaN or infinite
-    /// vertex is none: it makes an edge function or the determinant NaN or infinite).
-    #[inline(always)]
-    fn trusted(&self) -> (BoxPack8, Mask8) {
-        let [p0, p1, p2] = self.vertices.map(|[x, y, z]| Vec3x8 { x, y, z });
-        let tight = BoxPack8 {
-            min: p0.min(p1).min(p2),
-            max: p0.max(p1).max(p2),
-        };
-        tight.trusted(0.0)
-    }
+/// Each slot's trusted box, bit for bit as [`trusted_triangle_box`] makes it, valid in the
+/// slots of the mask that single precision can hit (a slot with a NaN or infinite vertex
+/// is none: it makes an edge function or the determinant NaN or infinite).
+#[inline(always)]
+pub(super) fn trusted8(vertices: &[[F32x8; 3]; 3]) -> (BoxPack8, Mask8) {
+    let [p0, p1, p2] = vertices.map(|[x, y, z]| Vec3x8 { x, y, z });
+    let tight = BoxPack8 {
+        min: p0.min(p1).min(p2),
+        max: p0.max(p1).max(p2),
+    };
+    tight.trusted(0.0)
 }
 
 /// [`triangle`] for the rays of `query`'s packet against one triangle, each lane within
@@ -623,6 +637,19 @@ fn packet_hits(
     }
     hits
 }
+/// [`triangle_packet`] for the triangle in slot `slot` of eight given by their vertices
+/// per axis (`vertices[i][axis]`), the packet's lanes within `(t_min, t_max)`.
+#[inline(always)]
+pub(super) fn slot_hits(
+    vertices: &[[F32x8; 3]; 3],
+    slot: usize,
+    query: &PacketQuery,
+    t_max: F32xP,
+    active: LaneBits,
+) -> PacketHits {
+    let coordinate = |i: usize, axis: usize| vertices[i][axis].lane(slot);
+    packet_hits(query, coordinate, query.t_min_lanes(), t_max, active)
+}
 
 /// [`triangle`] for one ray against the eight triangles of a pack.
 pub fn triangle_leaf(ray: &Ray, pack: &TrianglePack8, t_min: f32, t_max: f32) -> ShapeHit8 {
@@ -649,7 +676,7 @@ fn leaf_hits<const FRAME: usize>(query: &RayQuery, pack: &TrianglePack8, t_max: 
         Mask8::ALL,
     );
     if (hits.hit | exact).any() {
-        let trusted = query.holds8(pack.trusted(), hits.t);
+        let trusted = query.holds8(trusted8(&pack.vertices), hits.t);
         let t_max_lane = t_max.lane(0);
         settle(&mut hits, trusted, exact, t_max, |k| {
             triangle_hit(query, pack.slot(k), t_max_lane)
@@ -855,10 +882,19 @@ impl Triangles {
 
 impl LeafPack for Triangles {
     type Pack = TrianglePack8;
+    type Compact = MeshPack8;
+    const HAS_COMPACT: bool = true;
+    /// Where the full packs would pass 150 MB. Mesh packs hold 14 bytes a triangle less
+    /// for more work: `bench`, EPYC-512, best paths, `gen mount --level 10` and `11`
+    /// 0.94-0.99 of the full packs' speed (reflection at level 10: 0.995-1.02); the
+    /// dragon 0.95-0.98; AVX2, `mount_very_high` and the dragon 0.90-0.95.
+    const COMPACT_FROM: usize = 1 << 22;
+}
 
-    fn pack(&self, indices: impl Iterator<Item = usize>) -> TrianglePack8 {
-        let triangles: Vec<[Vec3; 3]> = indices.map(|i| self.vertices(i)).collect();
-        TrianglePack8::new(&triangles)
+impl PackOf<Triangles> for TrianglePack8 {
+    fn pack(storage: &Triangles, indices: impl Iterator<Item = usize>) -> Option<TrianglePack8> {
+        let triangles: Vec<[Vec3; 3]> = indices.map(|i| storage.vertices(i)).collect();
+        Some(TrianglePack8::new(&triangles))
     }
 
     const FRAMED: bool = true;
@@ -866,6 +902,13 @@ impl LeafPack for Triangles {
     #[inline(always)]
     fn leaf<const FRAME: usize>(pack: &TrianglePack8, query: &RayQuery, t_max: f32) -> ShapeHit8 {
         leaf_hits::<FRAME>(query, pack, t_max)
+    }
+
+    type Slots<'a> = &'a TrianglePack8;
+
+    #[inline(always)]
+    fn slots(pack: &TrianglePack8) -> &TrianglePack8 {
+        pack
     }
 
     #[inline(always)]
@@ -876,13 +919,7 @@ impl LeafPack for Triangles {
         t_max: F32xP,
         active: LaneBits,
     ) -> PacketHits {
-        packet_hits(
-            query,
-            |i, axis| pack.vertices[i][axis].lane(slot),
-            query.t_min_lanes(),
-            t_max,
-            active,
-        )
+        slot_hits(&pack.vertices, slot, query, t_max, active)
     }
 }
 
@@ -1041,7 +1078,7 @@ mod tests {
             // A vertex beyond the floats: no box.
             [max, Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::Y],
         ];
-        let (boxes, slots) = TrianglePack8::new(&triangles).trusted();
+        let (boxes, slots) = trusted8(&TrianglePack8::new(&triangles).vertices);
         let trusted_box = |slot: usize| {
             (slots.bitmask() & 1 << slot != 0).then(|| Aabb {
                 min: boxes.min.lane(slot),

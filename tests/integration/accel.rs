@@ -10,7 +10,7 @@ use p3trace::accel::count::{LaneTallies, NoCount, Tally};
 use p3trace::accel::stream::{self, Occlusions};
 use p3trace::accel::{AccelKind, AccelOptions, Tracer};
 use p3trace::accel::{BvhBuild, BvhWidth};
-use p3trace::intersect::{self, IntersectOptions, Rays8, Roots};
+use p3trace::intersect::{self, IntersectOptions, PackLayout, Rays8, Roots};
 use p3trace::prim::{PrimId, PrimKind};
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::{render, RenderOptions};
@@ -60,6 +60,13 @@ pub(crate) fn structures() -> Vec<AccelOptions> {
             kind: AccelKind::Bvh,
             bvh: BvhBuild::Midpoint,
             bvh_width: Some(BvhWidth::Eight),
+            ..base
+        },
+        // Mesh packs, and a soup's leaves in two packs each.
+        AccelOptions {
+            kind: AccelKind::Bvh,
+            bvh: BvhBuild::Sah,
+            packs: PackLayout::Compact,
             ..base
         },
     ]

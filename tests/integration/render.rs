@@ -10,6 +10,7 @@ use glam::Vec3;
 use p3trace::accel::{AccelKind, BvhWidth};
 use p3trace::compare;
 use p3trace::imaging::{to_byte, Film};
+use p3trace::intersect::PackLayout;
 use p3trace::render::sampler::SampleGrid;
 use p3trace::render::shade::{Profile, EPS};
 use p3trace::render::{render, RenderMode, RenderOptions, Sampling};
@@ -53,6 +54,38 @@ fn every_mode_gives_the_scalar_image() {
                     side * side
                 );
             }
+        }
+    }
+}
+
+/// The compact leaf packs (a mesh's shared vertices) give the full packs' image, float for
+/// float, in both modes: the project's triangle scenes, and the course's dragon and
+/// mountain where `../shared` is present.
+#[test]
+fn compact_leaf_packs_give_the_full_packs_image() {
+    let mut paths: Vec<_> = ["mount_high", "mount_low", "showcase", "balls_box"]
+        .map(|name| common::project_file(&format!("scenes/{name}.p3f")))
+        .to_vec();
+    if let Some(shared) = common::shared() {
+        for name in ["mount_very_high", "dragon"] {
+            paths.push(shared.join(format!("scenes/{name}.p3f")));
+        }
+    }
+    for path in paths {
+        let scene = parse_file(&path).unwrap();
+        for mode in RenderMode::ALL {
+            let [full, compact] = [PackLayout::Full, PackLayout::Compact].map(|packs| {
+                render_scene(&scene, |o| {
+                    (o.width, o.height) = (45, 31);
+                    o.mode = mode;
+                    o.accel.packs = packs;
+                })
+            });
+            assert!(
+                full == compact,
+                "{} ({mode:?}): the images differ",
+                path.display()
+            );
         }
     }
 }

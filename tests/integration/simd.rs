@@ -9,9 +9,9 @@ use std::cell::OnceCell;
 
 use glam::{Vec2, Vec3};
 use p3trace::intersect::{
-    self, Aabb, BoxPack8, BoxRay, BoxRays, Boxes, Hits8, IntersectOptions, Intervals, LeafPack,
-    PacketQuery, RayQuery, Rays8, Roots, ShapeHit, ShapeHits, Shapes, Shear, ShearLanes,
-    SpherePack8, Spheres, SurfacePoint, SurfacePoint8, TrianglePack8, Triangles,
+    self, Aabb, BoxPack8, BoxRay, BoxRays, Boxes, Hits8, IntersectOptions, Intervals, MeshPack8,
+    PackOf, PacketQuery, RayQuery, Rays8, Roots, ShapeHit, ShapeHit8, ShapeHits, Shapes, Shear,
+    ShearLanes, SpherePack8, Spheres, SurfacePoint, SurfacePoint8, TrianglePack8, Triangles,
 };
 use p3trace::ray::{Ray, RayPacket};
 use p3trace::render::camera::{Camera, FilmSample};
@@ -20,7 +20,8 @@ use p3trace::render::sampler::{Sample, SampleGrid, SampleRng};
 use p3trace::render::shade::{Bounce, Bounce8, Optics8, Phong, Phong8};
 use p3trace::scene::{CameraSpec, Material};
 use p3trace::simd::{
-    Bits, F32x16, F32x8, F32xP, Floats, LaneBits, LaneMask, Mask8, Vec3x8, PACKET,
+    table_code, table_halves, Bits, Codes8, F32x16, F32x8, F32xP, Floats, LaneBits, LaneMask,
+    Mask8, Vec3x8, PACKET,
 };
 use proptest::prelude::*;
 
@@ -118,6 +119,58 @@ fn triangle() -> impl Strategy<Value = [Vec3; 3]> {
         2 => [Vec3::NAN; 3],
         _ => [p0, p1, p2],
     })
+}
+
+/// Up to eight triangles that fit in a mesh pack ([`MeshPack8::new`]): up to four of any
+/// shape, or up to eight over at most twelve vertices, shared as a mesh's are.
+fn pack_triangles() -> impl Strategy<Value = Vec<[Vec3; 3]>> {
+    let vertex = prop_oneof![8 => point(), 1 => Just(Vec3::NAN)];
+    let shared = (
+        prop::collection::vec(vertex, 1..=12),
+        prop::collection::vec(prop::array::uniform3(0usize..12), 0..=8),
+    )
+        .prop_map(|(pool, corners)| {
+            (corners.iter())
+                .map(|c| c.map(|i| pool[i % pool.len()]))
+                .collect()
+        });
+    prop_oneof![prop::collection::vec(triangle(), 0..=4), shared]
+}
+
+/// Each slot of a leaf's `hits` against the scalar test of its triangle, the padding
+/// slots against a miss.
+fn leaf_equals_scalar(
+    what: &str,
+    triangles: &[[Vec3; 3]],
+    ray: &Ray,
+    (t_min, t_max): (f32, f32),
+    hits: ShapeHit8,
+) {
+    for i in 0..8 {
+        let scalar =
+            (triangles.get(i)).and_then(|&tri| intersect::triangle(ray, tri, t_min, t_max));
+        same(
+            &format!("{what} t"),
+            i,
+            scalar.map(|h| h.t),
+            hits.hit,
+            hits.t,
+        );
+        same(
+            &format!("{what} u"),
+            i,
+            scalar.map(|h| h.u),
+            hits.hit,
+            hits.u,
+        );
+        same(
+            &format!("{what} v"),
+            i,
+            scalar.map(|h| h.v),
+            hits.hit,
+            hits.v,
+        );
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -264,7 +317,7 @@ const CASES: u32 = 2000;
 /// `storage` (padding slots miss) in the ray's frame (as the walks call it), and each
 /// slot against the lanes of `p` from `t_min`, as the pack holds it and as `storage` does
 /// (`Shapes::intersect_packet`).
-fn pack_equals_scalar<K: LeafPack>(
+fn pack_equals_scalar<K: Shapes, P: PackOf<K>>(
     what: &str,
     storage: &K,
     ray: &Ray,
@@ -273,12 +326,12 @@ fn pack_equals_scalar<K: LeafPack>(
     options: IntersectOptions,
 ) {
     let n = storage.len();
-    let pack = storage.pack(0..n);
+    let pack = P::pack(storage, 0..n).expect("the primitives fit in a pack");
     let query = RayQuery::new(ray, t_min, options);
     let hits = match intersect::frame_of(ray.dir) {
-        0 => K::leaf::<0>(&pack, &query, t_max),
-        1 => K::leaf::<1>(&pack, &query, t_max),
-        _ => K::leaf::<2>(&pack, &query, t_max),
+        0 => P::leaf::<0>(&pack, &query, t_max),
+        1 => P::leaf::<1>(&pack, &query, t_max),
+        _ => P::leaf::<2>(&pack, &query, t_max),
     };
     for slot in 0..8 {
         let scalar = (slot < n)
@@ -291,7 +344,7 @@ fn pack_equals_scalar<K: LeafPack>(
     let shear = OnceCell::new();
     let query = PacketQuery::new(&rays, options, &shear);
     for slot in 0..n {
-        let in_pack = K::slot_packet(&pack, slot, &query, hi, active);
+        let in_pack = P::slot_packet(P::slots(&pack), slot, &query, hi, active);
         let in_storage = storage.intersect_packet(slot, &query, hi, active);
         for (k, ray) in p.rays.iter().enumerate() {
             let lane = RayQuery::new(ray, t_min, options);
@@ -492,13 +545,45 @@ proptest! {
     ) {
         let pack = TrianglePack8::new(&triangles);
         let hits = intersect::triangle_leaf(&ray, &pack, t_min, t_max);
-        for i in 0..8 {
-            let scalar = triangles
-                .get(i)
-                .and_then(|&tri| intersect::triangle(&ray, tri, t_min, t_max));
-            same("triangle leaf t", i, scalar.map(|h| h.t), hits.hit, hits.t);
-            same("triangle leaf u", i, scalar.map(|h| h.u), hits.hit, hits.u);
-            same("triangle leaf v", i, scalar.map(|h| h.v), hits.hit, hits.v);
+        leaf_equals_scalar("triangle leaf", &triangles, &ray, (t_min, t_max), hits);
+    }
+
+    #[test]
+    fn mesh_leaf_equals_scalar(
+        ray in triangle_ray(),
+        (t_min, t_max) in interval(),
+        triangles in prop_oneof![prop::collection::vec(triangle(), 0..=8), pack_triangles()],
+    ) {
+        // A pack holds the triangles where they share at most twelve vertices.
+        let mut distinct: Vec<[u32; 3]> = triangles
+            .iter()
+            .flatten()
+            .map(|v| v.to_array().map(f32::to_bits))
+            .collect();
+        distinct.sort_unstable();
+        distinct.dedup();
+        let Some(pack) = MeshPack8::new(&triangles) else {
+            prop_assert!(distinct.len() > 12, "{} vertices refused", distinct.len());
+            return Ok(());
+        };
+        prop_assert!(distinct.len() <= 12);
+        let hits = intersect::mesh_leaf(&ray, &pack, t_min, t_max);
+        leaf_equals_scalar("mesh leaf", &triangles, &ray, (t_min, t_max), hits);
+    }
+
+    #[test]
+    fn table_pick_equals_scalar(
+        table in prop::array::uniform12(coord()),
+        entries in prop::array::uniform8(0usize..12),
+    ) {
+        let codes = Codes8::new(&entries.map(table_code));
+        let (low, high) = table_halves(&table);
+        let (simd, scalar) = (codes.pick(low, high), codes.pick_lanes(low, high));
+        let looked_up = codes.lookup(&table);
+        for k in 0..8 {
+            prop_assert_eq!(simd.lane(k).to_bits(), scalar.lane(k).to_bits(), "lane {}", k);
+            prop_assert_eq!(scalar.lane(k).to_bits(), table[entries[k]].to_bits());
+            prop_assert_eq!(looked_up.lane(k).to_bits(), table[entries[k]].to_bits());
         }
     }
 
@@ -519,7 +604,7 @@ proptest! {
             roots,
             roots_margin,
         };
-        pack_equals_scalar("sphere pack", &storage, &ray, limits, &p, options);
+        pack_equals_scalar::<_, SpherePack8>("sphere pack", &storage, &ray, limits, &p, options);
     }
 
     #[test]
@@ -533,7 +618,23 @@ proptest! {
         for tri in triangles {
             storage.push(tri, None, 0);
         }
-        pack_equals_scalar("triangle pack", &storage, &ray, limits, &p, IntersectOptions::default());
+        let options = IntersectOptions::default();
+        pack_equals_scalar::<_, TrianglePack8>("triangle pack", &storage, &ray, limits, &p, options);
+    }
+
+    #[test]
+    fn mesh_pack_equals_scalar(
+        ray in triangle_ray(),
+        limits in interval(),
+        p in triangle_packet(),
+        triangles in pack_triangles(),
+    ) {
+        let mut storage = Triangles::default();
+        for tri in triangles {
+            storage.push(tri, None, 0);
+        }
+        let options = IntersectOptions::default();
+        pack_equals_scalar::<_, MeshPack8>("mesh pack", &storage, &ray, limits, &p, options);
     }
 
     #[test]
@@ -549,7 +650,8 @@ proptest! {
             storage.max.push(hi);
             storage.material.push(0);
         }
-        pack_equals_scalar("box pack", &storage, &ray, limits, &p, IntersectOptions::default());
+        let options = IntersectOptions::default();
+        pack_equals_scalar::<_, BoxPack8>("box pack", &storage, &ray, limits, &p, options);
     }
 
     #[test]
@@ -823,8 +925,10 @@ proptest! {
         let inv_dir = ray.dir.recip();
         let spheres = intersect::sphere_leaf(&ray, &SpherePack8::new(&[]), Roots::Precise, t_min, t_max).0;
         let triangles = intersect::triangle_leaf(&ray, &TrianglePack8::new(&[]), t_min, t_max);
+        let empty_mesh = MeshPack8::new(&[]).expect("no triangle fits");
+        let mesh = intersect::mesh_leaf(&ray, &empty_mesh, t_min, t_max);
         let boxes = intersect::aabb_leaf(&ray, inv_dir, &BoxPack8::new(&[]), t_min, t_max).0;
-        prop_assert!(spheres.none() && triangles.hit.none() && boxes.none());
+        prop_assert!(spheres.none() && triangles.hit.none() && mesh.hit.none() && boxes.none());
         // The same slots through the scalar routines.
         prop_assert!(intersect::sphere(&ray, Vec3::ZERO, SpherePack8::PAD_RADIUS, t_min, t_max).is_none());
         prop_assert!(intersect::triangle(&ray, [Vec3::NAN; 3], t_min, t_max).is_none());

@@ -69,13 +69,14 @@ pub fn held_since(before: usize) -> usize {
 
 /// Renders `scene` as its file asks, then prints the heap held once the scene is stored
 /// and once its structure is built, and checks the heap at the peak since [`start`]
-/// returned `before`, per primitive of the `count` of `kind`: at most `max_bytes` each.
+/// returned `before`, per primitive of the `count` of `kind`: at most `max_bytes` each,
+/// and where `max_held` is given, at most that many held once built.
 pub fn render_within(
     scene: &Scene,
     before: usize,
     count: usize,
     kind: &str,
-    max_bytes: f64,
+    (max_bytes, max_held): (f64, Option<f64>),
 ) -> RenderReport {
     let stored = held_since(before);
     let options = RenderOptions::from_scene(scene);
@@ -83,14 +84,14 @@ pub fn render_within(
     let built = held_since(before);
     let report = stage.render(&scene.camera, &options).unwrap();
     let peak = peak_since(before);
-    let each = peak as f64 / count as f64;
+    let (each, held) = (peak as f64 / count as f64, built as f64 / count as f64);
     eprintln!(
         "{}: stored in {:.0} MB ({:.1} bytes each), {:.1} bytes each held once built; \
          peak of the render {:.0} MB, {each:.1} bytes per {kind}; {} in {:.1} s",
         scene.name,
         stored as f64 / 1e6,
         stored as f64 / count as f64,
-        built as f64 / count as f64,
+        held,
         peak as f64 / 1e6,
         report.accel_name,
         (report.build_time + report.elapsed).as_secs_f64()
@@ -99,5 +100,11 @@ pub fn render_within(
         each <= max_bytes,
         "{each:.1} bytes per {kind} at the peak, above the stated {max_bytes}"
     );
+    if let Some(max_held) = max_held {
+        assert!(
+            held <= max_held,
+            "{held:.1} bytes per {kind} held once built, above the stated {max_held}"
+        );
+    }
     report
 }

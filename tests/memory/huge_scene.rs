@@ -29,7 +29,8 @@ pub fn ten_million_spheres_render_within_the_stated_memory() {
     );
     assert_eq!(scene.geometry.spheres.records.len(), SPHERES);
 
-    let report = counting::render_within(&scene, before, SPHERES, "sphere", MAX_BYTES_PER_SPHERE);
+    let limits = (MAX_BYTES_PER_SPHERE, None);
+    let report = counting::render_within(&scene, before, SPHERES, "sphere", limits);
 
     // The lattice fills the middle of the image; rays between its rows leave it.
     let background = report.film.pixels[0];

@@ -15,31 +15,34 @@ use glam::Vec3;
 
 use super::leaves::Leaves;
 use super::node::{
-    leaf_parts, leaf_ref, pack_code, ChildRef, Node8, LEAF, MAX_LEAF_PRIMS, MAX_PRIMS, RUN, WIDTH,
+    leaf_parts, leaf_ref, ChildRef, Node8, LEAF, MAX_LEAF_PRIMS, MAX_PRIMS, RUN, WIDTH,
 };
 use super::Bvh8;
 use crate::accel::bvh2::{several_threads, Bvh2, BvhBuild, Node};
-use crate::intersect::BoxPack8;
+use crate::intersect::{BoxPack8, PackLayout};
 use crate::prim::{PrimId, PrimKind};
 use crate::scene::Geometry;
 use rayon::prelude::*;
 
 impl Bvh8 {
     /// The tree over `geometry` as [`Bvh2::build`] takes it, built binary as far as the
-    /// packs and collapsed; the binary tree when it does not fit ([`Bvh8::collapse`]).
+    /// packs and collapsed, its packs in `layout`; the binary tree when it does not fit
+    /// ([`Bvh8::collapse`]).
     pub fn build(
         geometry: &Geometry,
         build: BvhBuild,
         shutter: [f32; 2],
         roots_margin: f32,
+        layout: PackLayout,
     ) -> Result<Bvh8, Bvh2> {
         let bvh2 = Bvh2::build_for_packs(geometry, build, shutter, roots_margin, PACK);
-        Self::collapse(bvh2, geometry)
+        Self::collapse(bvh2, geometry, layout)
     }
 
-    /// Converts the binary tree `bvh2`, which it consumes, or gives it back when it has
-    /// more primitives, or larger leaves, than the child references can encode.
-    pub fn collapse(bvh2: Bvh2, geometry: &Geometry) -> Result<Bvh8, Bvh2> {
+    /// Converts the binary tree `bvh2`, which it consumes, its packs in `layout`, or gives
+    /// it back when it has more primitives, or larger leaves, than the child references
+    /// can encode.
+    pub fn collapse(bvh2: Bvh2, geometry: &Geometry, layout: PackLayout) -> Result<Bvh8, Bvh2> {
         let leaves_fit = bvh2
             .nodes()
             .iter()
@@ -85,8 +88,10 @@ impl Bvh8 {
             depth,
             build,
             binary: stats,
+            compact: false,
         };
-        tree.fill(geometry, &prims, packs);
+        tree.fill(geometry, &prims, packs, layout);
+        tree.compact = tree.leaves.compact();
         // The packs hold their own ids: the order is kept only for runs to index.
         if tree.has_runs() {
             tree.prims = prims;
@@ -102,24 +107,30 @@ impl Bvh8 {
 
     /// Fills the packs `packs` over `prims`, each kind's in the order they come (on
     /// rayon's threads), and points their nodes' children at them.
-    fn fill(&mut self, geometry: &Geometry, prims: &[PrimId], mut packs: Vec<PackToFill>) {
+    fn fill(
+        &mut self,
+        geometry: &Geometry,
+        prims: &[PrimId],
+        mut packs: Vec<PackToFill>,
+        layout: PackLayout,
+    ) {
         let ids = |pack: &PackToFill| &prims[pack.start as usize..][..pack.len as usize];
         let kind_of = |pack: &PackToFill| prims[pack.start as usize].kind();
         // Each kind's packs side by side, in the order of `PrimKind::PACKED` (which their
         // codes follow), and still in their order within a kind (a scene of one packed
         // kind has them so: no sort's scratch beside them).
-        if !packs.is_sorted_by_key(|pack| pack_code(kind_of(pack))) {
-            packs.sort_by_key(|pack| pack_code(kind_of(pack)));
+        if !packs.is_sorted_by_key(|pack| kind_of(pack) as u8) {
+            packs.sort_by_key(|pack| kind_of(pack) as u8);
         }
         let mut rest = &packs[..];
         for kind in PrimKind::PACKED {
             let (these, after) = rest.split_at(rest.partition_point(|p| kind_of(p) == kind));
-            let first = self
-                .leaves
-                .extend(geometry, kind, these.len(), |i| ids(&these[i]));
+            let (code, first, moved) =
+                (self.leaves).extend(geometry, kind, layout, these.len(), |i| ids(&these[i]));
+            let place = |i: usize| moved.get(&i).copied().unwrap_or(first + i);
             for (i, pack) in these.iter().enumerate() {
                 self.nodes[pack.node as usize].child[pack.slot as usize] =
-                    leaf_ref(pack_code(kind), pack.len as usize, first + i);
+                    leaf_ref(code, pack.len as usize, place(i));
             }
             rest = after;
         }
@@ -397,10 +408,10 @@ mod tests {
                 if child & LEAF != 0 {
                     let (kind, count, index) = leaf_parts(child);
                     let ids = match kind {
-                        RUN => &self.prims[index..index + count],
-                        _ => &self.leaves.ids(child)[..count],
+                        RUN => self.prims[index..index + count].to_vec(),
+                        _ => self.leaves.prims(child),
                     };
-                    for id in ids {
+                    for id in &ids {
                         let k = all.iter().position(|p| p == id).unwrap();
                         seen[k] += 1;
                     }
@@ -439,8 +450,16 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            pool.install(|| Bvh8::build(&scene.geometry, BvhBuild::Sah, [0.0; 2], 0.0))
-                .expect("the tree fits")
+            pool.install(|| {
+                Bvh8::build(
+                    &scene.geometry,
+                    BvhBuild::Sah,
+                    [0.0; 2],
+                    0.0,
+                    PackLayout::Auto,
+                )
+            })
+            .expect("the tree fits")
         };
         let (one, two) = (build(1), build(2));
         // Packs of both kinds, filled each in its turn.
@@ -530,7 +549,8 @@ mod tests {
             }
             compared += 1;
             let least = least_areas_by_enumeration(bvh2.nodes());
-            let wide = Bvh8::collapse(bvh2, &scene.geometry).expect("small trees collapse");
+            let wide = Bvh8::collapse(bvh2, &scene.geometry, PackLayout::Auto)
+                .expect("small trees collapse");
             let chosen = node_areas(&wide);
             assert!(
                 (chosen - least).abs() <= 1e-5 * least,
@@ -540,6 +560,40 @@ mod tests {
         assert!(compared >= 4, "{compared} trees compared");
     }
 
+    /// Triangles of vertices of their own, close together: compact leaves of more than
+    /// four take two packs, and every triangle is in one leaf.
+    #[test]
+    fn compact_leaves_of_a_soup_go_on_in_a_second_pack() {
+        let text: String = (0..500)
+            .map(|i| {
+                let (x, y, z) = ((i % 10) as f32, (i / 10 % 10) as f32, (i / 100) as f32);
+                let (x2, y2) = (x + 0.5, y + 0.5);
+                format!("p 3 {x} {y} {z} {x2} {y} {z} {x} {y2} {z}\n")
+            })
+            .collect();
+        let scene = parse_text(&text).unwrap();
+        let wide = Bvh8::build(
+            &scene.geometry,
+            BvhBuild::Sah,
+            [0.0; 2],
+            0.0,
+            PackLayout::Compact,
+        )
+        .expect("the tree fits");
+        let all: Vec<PrimId> = scene.geometry.ids(PrimKind::Triangle).collect();
+        wide.validate(&all);
+        let leaves = wide
+            .nodes
+            .iter()
+            .flat_map(|n| n.child[..n.count as usize].iter());
+        let chained = leaves
+            .filter(|&&c| c & LEAF != 0 && leaf_parts(c).1 > crate::intersect::CHAIN_HEAD)
+            .count();
+        assert!(chained > 0, "no leaf of more than four triangles");
+    }
+
+    /// Spheres, and triangles of vertices of their own (a compact leaf of more than four
+    /// takes two packs), in both layouts.
     #[test]
     fn collapse_keeps_every_primitive_once_inside_nested_boxes() {
         for n in [1, 2, 9, 100, 1000] {
@@ -547,16 +601,25 @@ mod tests {
                 .map(|i| {
                     let x = (i * 37 % 101) as f32 * 0.3;
                     let y = (i * 53 % 89) as f32 * 0.2;
-                    format!("s {x} {y} {} 0.1\n", i % 7)
+                    let z = i % 7;
+                    let (x2, z2) = (x + 0.5, z as f32 + 0.5);
+                    format!("s {x} {y} {z} 0.1\np 3 {x} {y} {z} {x} {y} {z2} {x2} {y} {z}\n")
                 })
                 .collect();
             let scene = parse_text(&text).unwrap();
             for build in [BvhBuild::Sah, BvhBuild::Midpoint] {
-                let bvh2 = Bvh2::build(&scene.geometry, build, [0.0, 0.0], 0.0);
-                let (binary_depth, all) = (bvh2.depth(), bvh2.prims().to_vec());
-                let wide = Bvh8::collapse(bvh2, &scene.geometry).expect("small trees collapse");
-                wide.validate(&all);
-                assert!(wide.depth() <= binary_depth);
+                for layout in [PackLayout::Full, PackLayout::Compact] {
+                    let bvh2 = Bvh2::build(&scene.geometry, build, [0.0, 0.0], 0.0);
+                    let (binary_depth, all) = (bvh2.depth(), bvh2.prims().to_vec());
+                    let wide = Bvh8::collapse(bvh2, &scene.geometry, layout)
+                        .expect("small trees collapse");
+                    wide.validate(&all);
+                    assert!(wide.depth() <= binary_depth);
+                    // (The midpoint build's leaves of a sphere and a triangle are runs.)
+                    if n > 2 {
+                        assert_eq!(wide.compact, layout == PackLayout::Compact);
+                    }
+                }
             }
         }
     }

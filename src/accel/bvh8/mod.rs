@@ -21,6 +21,8 @@ use super::bvh2::{Bvh2Stats, BvhBuild};
 use super::count::Count;
 use super::hit::ClosestHit;
 use super::structure::Structure;
+#[cfg(test)]
+use crate::intersect::PackLayout;
 use crate::intersect::{with_frame, PacketQuery, RayQuery};
 use crate::plural::count;
 use crate::prim::PrimId;
@@ -40,6 +42,9 @@ pub struct Bvh8 {
     build: BvhBuild,
     /// The statistics of the binary tree it was collapsed from.
     binary: Bvh2Stats,
+    /// Whether its leaves hold compact packs ([`Leaves::compact`]), which its walks are
+    /// compiled for.
+    compact: bool,
 }
 
 /// Entries on the traversal stack of a tree `depth` levels deep: each level pushes at most
@@ -62,10 +67,13 @@ const SHALLOW_STACK: usize = stack_size(SHALLOW_DEPTH);
 /// of line, so that its stack is not in the frame of every caller.
 macro_rules! walk {
     ($tree:ident.$walk:ident::<$count:ty $(, $frame:ident)?>($($arg:expr),*)) => {
-        if $tree.depth <= SHALLOW_DEPTH {
-            $tree.$walk::<$count, SHALLOW_STACK $(, $frame)?>($($arg),*)
+        if $tree.depth <= SHALLOW_DEPTH && !$tree.compact {
+            $tree.$walk::<$count, SHALLOW_STACK $(, $frame)?, false>($($arg),*)
+        } else if !$tree.compact {
+            out_of_line(|| $tree.$walk::<$count, DEEP_STACK $(, $frame)?, false>($($arg),*))
         } else {
-            out_of_line(|| $tree.$walk::<$count, DEEP_STACK $(, $frame)?>($($arg),*))
+            // Trees of compact packs are large: one walk for them, of the deep stack.
+            out_of_line(|| $tree.$walk::<$count, DEEP_STACK $(, $frame)?, true>($($arg),*))
         }
     };
 }
@@ -141,9 +149,9 @@ impl Bvh8 {
     /// pack (up to eight lines) or a node (four) read cold stalls the test that reads it,
     /// and one pushed is most often entered.
     #[inline(always)]
-    fn prefetch_child(&self, child: ChildRef, closest: bool) {
+    fn prefetch_child<const COMPACT: bool>(&self, child: ChildRef, closest: bool) {
         if child & LEAF != 0 {
-            self.leaves.prefetch(child, closest);
+            self.leaves.prefetch::<COMPACT>(child, closest);
         } else if self.nodes.len() > PREFETCHED_NODES {
             crate::simd::prefetch(&self.nodes[child as usize]);
         }
@@ -209,7 +217,8 @@ mod tests {
         let scene = parse_text(&text).unwrap();
         let geometry = &scene.geometry;
         let bvh2 = Bvh2::build(geometry, BvhBuild::Sah, [0.0, 0.0], 0.0);
-        let shallow = Bvh8::collapse(bvh2, geometry).expect("small trees collapse");
+        let shallow =
+            Bvh8::collapse(bvh2, geometry, PackLayout::Auto).expect("small trees collapse");
         assert!(shallow.depth <= SHALLOW_DEPTH);
         let deep = Bvh8 {
             depth: SHALLOW_DEPTH + 1,

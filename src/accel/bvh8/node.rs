@@ -13,8 +13,9 @@ pub const WIDTH: usize = 8;
 /// `prims`) or its pack.
 pub type ChildRef = u32;
 pub const LEAF: u32 = 1 << 31;
-/// Enough bits for a run and every packed kind: two for up to three packed kinds.
-const KIND_BITS: u32 = u32::BITS - (PrimKind::PACKED.len() as u32).leading_zeros();
+/// Enough bits for a run and every packed kind in both layouts: three for up to three
+/// packed kinds.
+const KIND_BITS: u32 = u32::BITS - (2 * PrimKind::PACKED.len() as u32).leading_zeros();
 const KIND_SHIFT: u32 = 31 - KIND_BITS;
 const COUNT_SHIFT: u32 = KIND_SHIFT - 3;
 const INDEX_MASK: u32 = (1 << COUNT_SHIFT) - 1;
@@ -24,14 +25,16 @@ pub const RUN: u32 = 0;
 pub const MAX_LEAF_PRIMS: usize = 1 << (KIND_SHIFT - COUNT_SHIFT);
 pub const MAX_PRIMS: usize = INDEX_MASK as usize + 1;
 
-/// The leaf kind of a pack of the packed kind `kind`: one more than its place in
-/// [`PrimKind::PACKED`]. A kind that is not packed has none (a compile-time error where
-/// it is asked for in a constant).
-pub const fn pack_code(kind: PrimKind) -> u32 {
+/// The leaf kind of a pack of the packed kind `kind`, in the compact layout or not
+/// ([`crate::intersect::LeafPack::Compact`]): one more than its place in
+/// [`PrimKind::PACKED`], and after all of those where compact. A kind that is not packed
+/// has none (a compile-time error where it is asked for in a constant).
+pub const fn pack_code(kind: PrimKind, compact: bool) -> u32 {
     let mut i = 0;
     while i < PrimKind::PACKED.len() {
         if PrimKind::PACKED[i] as u8 == kind as u8 {
-            return i as u32 + 1;
+            let layout = if compact { PrimKind::PACKED.len() } else { 0 };
+            return (layout + i) as u32 + 1;
         }
         i += 1;
     }

@@ -27,7 +27,7 @@ impl Bvh8 {
     /// stack. An entry is skipped when it lies beyond every lane's closest hit; a subtree
     /// left with few lanes is finished one ray at a time. Each lane's answer is the one
     /// single-ray walk ([`Bvh8::closest_from`]) gives.
-    pub(super) fn packet_closest<C: Count, const STACK: usize>(
+    pub(super) fn packet_closest<C: Count, const STACK: usize, const COMPACT: bool>(
         &self,
         geometry: &Geometry,
         query: &PacketQuery,
@@ -57,7 +57,7 @@ impl Bvh8 {
             if leaf
                 && self
                     .leaves
-                    .closest_packet(child, query, lanes, closest, count)
+                    .closest_packet::<_, COMPACT>(child, query, lanes, closest, count)
             {
                 limit = lanes_of(closest, ClosestHit::limit);
                 continue;
@@ -68,7 +68,7 @@ impl Bvh8 {
                         let (lane, mut counted) = (query.lane(k), C::default());
                         let closest = &mut closest[k];
                         if leaf {
-                            self.closest_in_leaf::<C, FRAME>(
+                            self.closest_in_leaf::<C, FRAME, COMPACT>(
                                 geometry,
                                 child,
                                 &lane,
@@ -76,7 +76,7 @@ impl Bvh8 {
                                 &mut counted,
                             );
                         } else {
-                            self.closest_from::<C, STACK, FRAME>(
+                            self.closest_from::<C, STACK, FRAME, COMPACT>(
                                 child,
                                 geometry,
                                 &lane,
@@ -111,7 +111,7 @@ impl Bvh8 {
                             .select(intervals.entry, F32xP::splat(f32::INFINITY))
                             .min_lane(),
                     };
-                    self.prefetch_child(node.child[c], true);
+                    self.prefetch_child::<COMPACT>(node.child[c], true);
                     stack.push_sorted(floor, (node.child[c], hit.bitmask(), entry), |e| e.2);
                 }
             });
@@ -120,7 +120,7 @@ impl Bvh8 {
 
     /// The active lanes of `query`'s packet whose ray is blocked within its interval, as
     /// a bit mask, the rays traced together as in [`Bvh8::packet_closest`].
-    pub(super) fn packet_occluded<C: Count, const STACK: usize>(
+    pub(super) fn packet_occluded<C: Count, const STACK: usize, const COMPACT: bool>(
         &self,
         geometry: &Geometry,
         query: &PacketQuery,
@@ -145,7 +145,8 @@ impl Bvh8 {
             }
             let leaf = child & LEAF != 0;
             let in_pack = if leaf {
-                self.leaves.blocks_packet(child, query, lanes, count)
+                self.leaves
+                    .blocks_packet::<_, COMPACT>(child, query, lanes, count)
             } else {
                 None
             };
@@ -161,9 +162,9 @@ impl Bvh8 {
                     with_frame!(frame, FRAME => for_lanes(lanes, |k| {
                         let (lane, mut counted) = (query.lane(k), C::default());
                         let hit = if leaf {
-                            self.blocks::<C, FRAME>(geometry, child, &lane, t_max[k], &mut counted)
+                            self.blocks::<C, FRAME, COMPACT>(geometry, child, &lane, t_max[k], &mut counted)
                         } else {
-                            self.occluded_from::<C, STACK, FRAME>(
+                            self.occluded_from::<C, STACK, FRAME, COMPACT>(
                                 child,
                                 geometry,
                                 &lane,
@@ -191,7 +192,7 @@ impl Bvh8 {
                 let intervals = box_rays.interval(min, max, lanes_t_min, lanes_t_max);
                 let hit = intervals.hit.bitmask() & lanes;
                 if hit != 0 {
-                    self.prefetch_child(node.child[c], false);
+                    self.prefetch_child::<COMPACT>(node.child[c], false);
                     stack.push((node.child[c], hit));
                 }
             });

@@ -13,7 +13,7 @@ use crate::simd::for_lanes;
 impl Bvh8 {
     /// Tests the primitives of leaf `child`, keeping the winner in `closest`.
     #[inline]
-    pub(super) fn closest_in_leaf<C: Count, const FRAME: usize>(
+    pub(super) fn closest_in_leaf<C: Count, const FRAME: usize, const COMPACT: bool>(
         &self,
         geometry: &Geometry,
         child: ChildRef,
@@ -24,7 +24,7 @@ impl Bvh8 {
         let (_, count, index) = leaf_parts(child);
         counted.leaf();
         counted.prims(count as u32);
-        if !self.leaves.closest::<FRAME>(child, query, closest) {
+        if !self.leaves.closest::<FRAME, COMPACT>(child, query, closest) {
             for &prim in &self.prims[index..index + count] {
                 closest.test(geometry, prim, query);
             }
@@ -35,7 +35,7 @@ impl Bvh8 {
     /// Inlined into the walks, as it was before they counted: out of line, the scalar
     /// render ran 0.9% more instructions (callgrind, dragon).
     #[inline(always)]
-    pub(super) fn blocks<C: Count, const FRAME: usize>(
+    pub(super) fn blocks<C: Count, const FRAME: usize, const COMPACT: bool>(
         &self,
         geometry: &Geometry,
         child: ChildRef,
@@ -44,7 +44,7 @@ impl Bvh8 {
         counted: &mut C,
     ) -> bool {
         counted.leaf();
-        let in_pack = self.leaves.blocks::<FRAME>(child, query, t_max);
+        let in_pack = self.leaves.blocks::<FRAME, COMPACT>(child, query, t_max);
         if in_pack.is_some() {
             counted.prims(leaf_parts(child).1 as u32);
         }
@@ -60,7 +60,12 @@ impl Bvh8 {
 
     /// The closest hit of `query` in the subtree under `start`, offered to `closest`.
     #[inline]
-    pub(super) fn closest_from<C: Count, const STACK: usize, const FRAME: usize>(
+    pub(super) fn closest_from<
+        C: Count,
+        const STACK: usize,
+        const FRAME: usize,
+        const COMPACT: bool,
+    >(
         &self,
         start: ChildRef,
         geometry: &Geometry,
@@ -77,7 +82,7 @@ impl Bvh8 {
                 continue;
             }
             if child & LEAF != 0 {
-                self.closest_in_leaf::<C, FRAME>(geometry, child, query, closest, count);
+                self.closest_in_leaf::<C, FRAME, COMPACT>(geometry, child, query, closest, count);
                 continue;
             }
             let node = &self.nodes[child as usize];
@@ -87,7 +92,7 @@ impl Bvh8 {
             // The hit children sorted on the stack, the nearest on top to be popped next.
             let floor = stack.len();
             for_lanes(hits, |k| {
-                self.prefetch_child(node.child[k], true);
+                self.prefetch_child::<COMPACT>(node.child[k], true);
                 stack.push_sorted(floor, (node.child[k], entries[k]), |e| e.1)
             });
         }
@@ -96,7 +101,12 @@ impl Bvh8 {
     /// Whether a primitive of the subtree under `start` blocks `query` within
     /// `(query.t_min, t_max)`.
     #[inline(always)]
-    pub(super) fn occluded_from<C: Count, const STACK: usize, const FRAME: usize>(
+    pub(super) fn occluded_from<
+        C: Count,
+        const STACK: usize,
+        const FRAME: usize,
+        const COMPACT: bool,
+    >(
         &self,
         start: ChildRef,
         geometry: &Geometry,
@@ -109,7 +119,7 @@ impl Bvh8 {
         let mut next = Some(start);
         while let Some(child) = next.take().or_else(|| stack.pop()) {
             if child & LEAF != 0 {
-                if self.blocks::<C, FRAME>(geometry, child, query, t_max, count) {
+                if self.blocks::<C, FRAME, COMPACT>(geometry, child, query, t_max, count) {
                     return true;
                 }
                 continue;
@@ -122,7 +132,7 @@ impl Bvh8 {
                 // The last child pushed is the one popped next: it skips the stack.
                 let last = hits.ilog2() as usize;
                 for_lanes(hits & !(1 << last), |k| {
-                    self.prefetch_child(node.child[k], false);
+                    self.prefetch_child::<COMPACT>(node.child[k], false);
                     stack.push(node.child[k])
                 });
                 next = Some(node.child[last]);
