@@ -52,7 +52,8 @@ use none::BruteForce;
 pub use structure::Structure;
 
 /// The acceleration structure over a scene's bounded primitives: one variant per
-/// traversal engine.
+/// traversal engine. Unboxed though the 8-wide tree is the largest variant (its packs of
+/// both layouts): there is one per tracer, and every query reads the tree in place.
 #[derive(Clone, Debug)]
 #[allow(clippy::large_enum_variant)]
 pub enum Accel {
