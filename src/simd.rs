@@ -164,8 +164,8 @@ pub fn for_lanes<B: Bits>(mut mask: B, mut f: impl FnMut(usize)) {
     }
 }
 
-/// Entries of a [`Codes8::lookup`] table: the distinct vertices of a leaf pack of eight
-/// triangles, which a mesh's packs share (nine to eleven, most of them).
+/// Entries of a table whose halves [`Codes8::pick`] picks from: the distinct vertices of
+/// a leaf pack of eight triangles, which a mesh's packs share (nine to eleven, most of them).
 pub const TABLE: usize = 12;
 
 /// How a lane names entry `entry` of a table of [`TABLE`]: entries 0 to 7 as themselves,
@@ -250,13 +250,6 @@ impl Codes8 {
             code @ 0..8 => low.lane(code as usize),
             code => high.lane(code as usize - 8),
         })
-    }
-
-    /// Lane `k`: `table[table_entry(code k)]` ([`Codes8::pick`] of its two halves).
-    #[inline(always)]
-    pub fn lookup(&self, table: &[f32; TABLE]) -> F32x8 {
-        let (low, high) = table_halves(table);
-        self.pick(low, high)
     }
 }
 

@@ -83,9 +83,10 @@ impl MeshPack8 {
     /// `vertices[i][axis]`: coordinate `axis` of vertex `i` of each slot.
     #[inline(always)]
     fn vertices(&self) -> [[F32x8; 3]; 3] {
+        let halves = self.table.each_ref().map(table_halves);
         self.corners.each_ref().map(|codes| {
             let codes = Codes8::new(codes);
-            self.table.each_ref().map(|axis| codes.lookup(axis))
+            halves.map(|(low, high)| codes.pick(low, high))
         })
     }
 

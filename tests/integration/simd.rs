@@ -579,11 +579,9 @@ proptest! {
         let codes = Codes8::new(&entries.map(table_code));
         let (low, high) = table_halves(&table);
         let (simd, scalar) = (codes.pick(low, high), codes.pick_lanes(low, high));
-        let looked_up = codes.lookup(&table);
         for k in 0..8 {
             prop_assert_eq!(simd.lane(k).to_bits(), scalar.lane(k).to_bits(), "lane {}", k);
             prop_assert_eq!(scalar.lane(k).to_bits(), table[entries[k]].to_bits());
-            prop_assert_eq!(looked_up.lane(k).to_bits(), table[entries[k]].to_bits());
         }
     }
 
