@@ -8,6 +8,7 @@ use glam::Vec3;
 use libfuzzer_sys::fuzz_target;
 use p3trace::accel::{AccelKind, AccelOptions, Tracer};
 use p3trace::accel::{BvhBuild, BvhWidth};
+use p3trace::intersect::PackLayout;
 use p3trace::ray::{Hit, Ray, RayPacket};
 use p3trace::render::sampler::SampleGrid;
 use p3trace::render::shade::Profile;
@@ -179,6 +180,11 @@ fn structures() -> Vec<AccelOptions> {
         bvh(BvhBuild::Midpoint, BvhWidth::Eight),
         bvh(BvhBuild::Sah, BvhWidth::Two),
         bvh(BvhBuild::Sah, BvhWidth::Eight),
+        // The compact packs that large meshes take, forced on small scenes.
+        AccelOptions {
+            packs: PackLayout::Compact,
+            ..bvh(BvhBuild::Sah, BvhWidth::Eight)
+        },
     ]
 }
 
