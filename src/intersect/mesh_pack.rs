@@ -80,14 +80,23 @@ impl MeshPack8 {
         })
     }
 
+    /// Each slot's three corners' codes, widened for [`Codes8::pick`].
+    #[inline(always)]
+    fn codes(&self) -> [Codes8; 3] {
+        self.corners.each_ref().map(Codes8::new)
+    }
+
+    /// The table's halves per axis ([`table_halves`]): `(low, high)`, each `[x, y, z]`.
+    #[inline(always)]
+    fn halves(&self) -> ([F32x8; 3], [F32x8; 3]) {
+        let halves = self.table.each_ref().map(table_halves);
+        (halves.map(|h| h.0), halves.map(|h| h.1))
+    }
+
     /// `vertices[i][axis]`: coordinate `axis` of vertex `i` of each slot.
     #[inline(always)]
     fn vertices(&self) -> [[F32x8; 3]; 3] {
-        let halves = self.table.each_ref().map(table_halves);
-        self.corners.each_ref().map(|codes| {
-            let codes = Codes8::new(codes);
-            halves.map(|(low, high)| codes.pick(low, high))
-        })
+        pick_corners(&self.codes(), self.halves())
     }
 
     /// The vertices of slot `slot`.
@@ -105,6 +114,15 @@ impl MeshPack8 {
     }
 }
 
+/// `corners[i][j]`: coordinate `j` of vertex `i` of each slot, picked by the slots' codes
+/// `codes` from a table's halves `(low, high)` (each `[x, y, z]`, sheared or not).
+#[inline(always)]
+fn pick_corners(codes: &[Codes8; 3], (low, high): ([F32x8; 3], [F32x8; 3])) -> [[F32x8; 3]; 3] {
+    codes
+        .each_ref()
+        .map(|codes| [0, 1, 2].map(|j| codes.pick(low[j], high[j])))
+}
+
 /// The watertight test for one ray against the eight triangles of a mesh pack, as
 /// [`crate::intersect::triangle_leaf`] against a [`TrianglePack8`] of the same triangles.
 pub fn mesh_leaf(ray: &Ray, pack: &MeshPack8, t_min: f32, t_max: f32) -> ShapeHit8 {
@@ -120,16 +138,12 @@ fn leaf_hits<const FRAME: usize>(query: &RayQuery, pack: &MeshPack8, t_max: f32)
     let shear = &Shear::on(query, FRAMES[FRAME]);
     let (t_min, t_max) = (F32x8::splat(query.t_min), F32x8::splat(t_max));
     let [sx, sy, sz] = shear.factors8();
-    let halves = pack.table.each_ref().map(table_halves);
     let sheared = |p: [F32x8; 3]| {
         let p = shear.relative8(&p);
         [p.x - sx * p.z, p.y - sy * p.z, p.z]
     };
-    let (low, high) = (sheared(halves.map(|h| h.0)), sheared(halves.map(|h| h.1)));
-    let corners = pack.corners.each_ref().map(|codes| {
-        let codes = Codes8::new(codes);
-        [0, 1, 2].map(|j| codes.pick(low[j], high[j]))
-    });
+    let (codes, (low, high)) = (pack.codes(), pack.halves());
+    let corners = pick_corners(&codes, (sheared(low), sheared(high)));
     let (mut hits, exact) = watertight_sheared(
         corners.map(|[x, y, _]| [x, y]),
         corners.map(|[_, _, z]| z),
@@ -138,7 +152,8 @@ fn leaf_hits<const FRAME: usize>(query: &RayQuery, pack: &MeshPack8, t_max: f32)
         pack.used(),
     );
     if (hits.hit | exact).any() {
-        let trusted = query.holds8(trusted8(&pack.vertices()), hits.t);
+        let vertices = pick_corners(&codes, (low, high));
+        let trusted = query.holds8(trusted8(&vertices), hits.t);
         let t_max_lane = t_max.lane(0);
         settle(&mut hits, trusted, exact, t_max, |k| {
             triangle_hit(query, pack.slot(k), t_max_lane)
@@ -149,8 +164,8 @@ fn leaf_hits<const FRAME: usize>(query: &RayQuery, pack: &MeshPack8, t_max: f32)
 
 impl PackOf<Triangles> for MeshPack8 {
     fn pack(storage: &Triangles, indices: impl Iterator<Item = usize>) -> Option<MeshPack8> {
-        let triangles: Vec<[Vec3; 3]> = indices.map(|i| storage.vertices(i)).collect();
-        MeshPack8::new(&triangles)
+        let (triangles, n) = storage.pack_vertices(indices);
+        MeshPack8::new(&triangles[..n])
     }
 
     const CHAINS: bool = true;

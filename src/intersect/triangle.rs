@@ -637,6 +637,7 @@ fn packet_hits(
     }
     hits
 }
+
 /// [`triangle_packet`] for the triangle in slot `slot` of eight given by their vertices
 /// per axis (`vertices[i][axis]`), the packet's lanes within `(t_min, t_max)`.
 #[inline(always)]
@@ -852,6 +853,25 @@ impl Triangles {
         self.corners[i].map(|c| self.positions[c as usize])
     }
 
+    /// The vertices of the triangles `indices` (at most eight) for a pack, and how many
+    /// they are: gathered in place, not in a vector allocated for each pack.
+    ///
+    /// # Panics
+    /// If given more than eight triangles.
+    pub(super) fn pack_vertices(
+        &self,
+        indices: impl Iterator<Item = usize>,
+    ) -> ([[Vec3; 3]; 8], usize) {
+        let mut triangles = [[Vec3::ZERO; 3]; 8];
+        let mut n = 0;
+        for i in indices {
+            assert!(n < 8, "a pack holds at most 8 triangles");
+            triangles[n] = self.vertices(i);
+            n += 1;
+        }
+        (triangles, n)
+    }
+
     /// The edges `p1 - p0` and `p2 - p0` of triangle `i`, and its vertex `p0`.
     #[inline(always)]
     fn edges(&self, i: usize) -> ([Vec3; 2], Vec3) {
@@ -893,8 +913,8 @@ impl LeafPack for Triangles {
 
 impl PackOf<Triangles> for TrianglePack8 {
     fn pack(storage: &Triangles, indices: impl Iterator<Item = usize>) -> Option<TrianglePack8> {
-        let triangles: Vec<[Vec3; 3]> = indices.map(|i| storage.vertices(i)).collect();
-        Some(TrianglePack8::new(&triangles))
+        let (triangles, n) = storage.pack_vertices(indices);
+        Some(TrianglePack8::new(&triangles[..n]))
     }
 
     const FRAMED: bool = true;

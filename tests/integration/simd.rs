@@ -312,6 +312,15 @@ fn when(active: bool, answer: Option<f32>) -> Option<f32> {
 
 const CASES: u32 = 2000;
 
+/// A storage of `triangles`, in their order.
+fn triangle_storage(triangles: Vec<[Vec3; 3]>) -> Triangles {
+    let mut storage = Triangles::default();
+    for tri in triangles {
+        storage.push(tri, None, 0);
+    }
+    storage
+}
+
 /// A packed kind's [`LeafPack`] against its scalar test (`Shapes::intersect`), bit for
 /// bit: the leaf kernel, one ray within `(t_min, t_max)` against the pack of all of
 /// `storage` (padding slots miss) in the ray's frame (as the walks call it), and each
@@ -612,10 +621,7 @@ proptest! {
         p in triangle_packet(),
         triangles in prop::collection::vec(triangle(), 0..=8),
     ) {
-        let mut storage = Triangles::default();
-        for tri in triangles {
-            storage.push(tri, None, 0);
-        }
+        let storage = triangle_storage(triangles);
         let options = IntersectOptions::default();
         pack_equals_scalar::<_, TrianglePack8>("triangle pack", &storage, &ray, limits, &p, options);
     }
@@ -627,10 +633,7 @@ proptest! {
         p in triangle_packet(),
         triangles in pack_triangles(),
     ) {
-        let mut storage = Triangles::default();
-        for tri in triangles {
-            storage.push(tri, None, 0);
-        }
+        let storage = triangle_storage(triangles);
         let options = IntersectOptions::default();
         pack_equals_scalar::<_, MeshPack8>("mesh pack", &storage, &ray, limits, &p, options);
     }
