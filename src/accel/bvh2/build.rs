@@ -392,7 +392,6 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
         let centre = 0.5 * (Vec3A::from(bounds.min) + Vec3A::from(bounds.max));
         ((centre - low) * scale, centre)
     };
-    let bin = |place: f32| (place as usize).min(BINS - 1);
     // Every axis's bins in one pass over the items; the boxes' unions are exact (an axis
     // without extent fills bins that are never read), so a large node's chunks are binned
     // on rayon's threads and their bins merged. A bit a bin says it holds items.
@@ -403,7 +402,7 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
             let (min, max) = (Vec3A::from(it.bounds.min), Vec3A::from(it.bounds.max));
             let (place, _) = place_of(&it.bounds);
             for (axis, axis_bins) in bins.iter_mut().enumerate() {
-                let i = bin(place[axis]);
+                let i = bin_of(place[axis]);
                 axis_bins[i] = add(axis_bins[i], (min, max, 1));
                 used[axis] |= 1 << i;
             }
@@ -467,23 +466,11 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
     if n <= MAX_LEAF && cost >= n as f32 {
         return None;
     }
-    // The items in place, each side's centroids gathered on the way as a bin's box (in
-    // vectors: the boxes of `Vec3` blend their fourth lane at each step), each item's side
-    // from its place on `axis` alone, computed as the binning computed that lane.
-    let (axis_low, axis_scale) = (low[axis], scale[axis]);
-    let (mut k, mut left, mut right) = (0, EMPTY_BIN, EMPTY_BIN);
-    for i in 0..n {
-        let bounds = &items[i].bounds;
-        let centre = 0.5 * (Vec3A::from(bounds.min) + Vec3A::from(bounds.max));
-        let on_axis = 0.5 * (bounds.min[axis] + bounds.max[axis]);
-        if bin((on_axis - axis_low) * axis_scale) <= last_left {
-            left = add(left, (centre, centre, 1));
-            swap_items(items, k, i);
-            k += 1;
-        } else {
-            right = add(right, (centre, centre, 1));
-        }
-    }
+    let (k, left, right) = match axis {
+        0 => partition::<0>(items, low[0], scale[0], last_left),
+        1 => partition::<1>(items, low[1], scale[1], last_left),
+        _ => partition::<2>(items, low[2], scale[2], last_left),
+    };
     let (left_centroids, right_centroids) = (boxed(left), boxed(right));
     Some(Split {
         k,
@@ -496,6 +483,47 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
             centroids: right_centroids,
         },
     })
+}
+
+/// The bin of an item whose centroid lies `place` bins along an axis: NaN (an axis without
+/// extent) in the first.
+#[inline(always)]
+fn bin_of(place: f32) -> usize {
+    let clamped = place.max(0.0).min((BINS - 1) as f32);
+    // SAFETY: `clamped` is a number in [0, BINS - 1], never NaN (`max` returns the number).
+    (unsafe { clamped.to_int_unchecked::<u32>() }) as usize
+}
+
+/// Moves the items whose bin on `AXIS` is at most `last_left` to the front, from both
+/// ends, so that only the misplaced move; each item's side from its place on `AXIS`
+/// alone, computed as the binning computed that lane. Returns how many went left and
+/// each side's centroids as a bin's box (in vectors: the boxes of `Vec3` blend their
+/// fourth lane at each step).
+fn partition<const AXIS: usize>(
+    items: &mut [Item],
+    axis_low: f32,
+    axis_scale: f32,
+    last_left: usize,
+) -> (usize, Bin, Bin) {
+    let goes_left = |it: &Item| {
+        let on_axis = 0.5 * (it.bounds.min[AXIS] + it.bounds.max[AXIS]);
+        bin_of((on_axis - axis_low) * axis_scale) <= last_left
+    };
+    let centre = |it: &Item| {
+        let c = 0.5 * (Vec3A::from(it.bounds.min) + Vec3A::from(it.bounds.max));
+        (c, c, 1)
+    };
+    let (mut k, mut left, mut right) = (0, EMPTY_BIN, EMPTY_BIN);
+    for i in 0..items.len() {
+        if goes_left(&items[i]) {
+            left = add(left, centre(&items[i]));
+            swap_items(items, k, i);
+            k += 1;
+        } else {
+            right = add(right, centre(&items[i]));
+        }
+    }
+    (k, left, right)
 }
 
 #[cfg(test)]
