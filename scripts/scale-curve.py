@@ -11,7 +11,10 @@ per scene:
 - the ratio p3trace-best / the best anchor per ray set, their geometric mean and the lowest,
   and p3trace's and Embree's build time and peak memory;
 - each tracer's Mrays/s per set, its build time and the peak resident memory of its
-  process (the scene, the structure and the protocol's rays; `wait4`'s maxrss).
+  process (the scene, the structure and the protocol's rays; `wait4`'s maxrss);
+- with --renders, a whole Whitted render of the scene (its resolution, 1 spp, 1 thread):
+  Embree's render time (../shared/bench/embree-render --best, its fastest mode) over
+  p3trace's (`render --json`'s render_s), the least of --render-reps each.
 
 Results are kept in DIR (default target/scale-curve), one file per scene and tracer, with a
 last comment line `# scale-curve peak_rss_kib K wall_s S`; --reuse reads a scene's results
@@ -24,6 +27,7 @@ within 0.05%), 2 for bad arguments or a tracer that fails.
 """
 
 import argparse
+import json
 import math
 import os
 import re
@@ -39,6 +43,7 @@ TRACERS = ("p3trace", "embree", "tinybvh")
 COLOURS = {"p3trace": "#1f4e9c", "embree": "#c8560f", "tinybvh": "#2a8c4a"}
 FAMILIES = {"mount": ("o", "-"), "balls": ("s", "--")}
 TRAILER = re.compile(r"^# scale-curve peak_rss_kib (\d+) wall_s ([0-9.]+)$", re.M)
+RENDER_TRAILER = re.compile(r"^# scale-curve render_s ([0-9.]+)$", re.M)
 
 
 class Failure(Exception):
@@ -136,7 +141,47 @@ def measure(args, family, size):
             print(f"scale-curve: {name}: {tracer}", file=sys.stderr, flush=True)
             text = run(command + [scene, "--threads", "1", "--reps", str(args.reps)], path)
         results[tracer] = parse(tracer, text, path)
+    if args.renders:
+        results["p3trace"]["render"] = renders(args, name, scene)
     return name, family, results
+
+
+def least_render(tracer, text, where):
+    """The least render time of one tracer's render results."""
+    times = []
+    for line in text.splitlines():
+        if tracer == "p3trace" and line.startswith("{"):
+            times.append(float(json.loads(line)["render_s"]))
+        elif tracer == "embree" and len(fields := line.split()) == 8 and fields[4] == "best":
+            times.append(float(fields[5]))
+    if not times:
+        raise Failure(f"{where}: no render time in the {tracer} render result")
+    return min(times)
+
+
+def renders(args, name, scene):
+    """Embree's least render time over p3trace's, each kept in DIR as its runs' output
+    and a last line `# scale-curve render_s S`."""
+    least = {}
+    for tracer in ("p3trace", "embree"):
+        path = args.dir / f"{name}.render.{tracer}.txt"
+        text = path.read_text() if args.reuse and path.exists() else None
+        if text is None or not RENDER_TRAILER.search(text):
+            print(f"scale-curve: {name}: {tracer} render", file=sys.stderr, flush=True)
+            if tracer == "p3trace":
+                image = args.dir / f"{name}.png"
+                command = [args.p3trace, "render", scene, "--threads", "1", "--accel", "bvh",
+                           "--no-skybox", "-q", "-o", image, "--json", "-"]
+                # Each run's document on a line of its own, without the memory trailer.
+                runs = [TRAILER.sub("", run(command, path)) for _ in range(args.render_reps)]
+                text = "".join(json.dumps(json.loads(r)) + "\n" for r in runs)
+            else:
+                command = [args.embree_render, scene, "--threads", "1", "--best", "--reps", str(args.render_reps)]
+                text = run(command, path)
+            text += f"# scale-curve render_s {least_render(tracer, text, path)}\n"
+            path.write_text(text)
+        least[tracer] = float(RENDER_TRAILER.search(text)[1])
+    return least["embree"] / least["p3trace"]
 
 
 def geomean(values):
@@ -154,9 +199,11 @@ def both(results, field, form):
 
 def tables(rows):
     """The Markdown tables: ratios, then each tracer's figures."""
+    with_renders = any("render" in results["p3trace"] for _, _, results in rows)
     out = [
-        "| scene | primitives | primary | shadow | reflection | geomean | lowest | build s | peak MiB |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| scene | primitives | primary | shadow | reflection | geomean | lowest | build s | peak MiB |"
+        + (" render |" if with_renders else ""),
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|" + ("---:|" if with_renders else ""),
     ]
     for name, _, results in rows:
         ours = results["p3trace"]
@@ -173,6 +220,9 @@ def tables(rows):
             cells.append(f"{ratio:.2f} ({who[0].upper()})")
         summary = [f"{geomean(ratios):.2f}", f"{min(ratios):.2f}"] if ratios else ["-", "-"]
         summary += [both(results, "build_s", "{:.3f}"), both(results, "peak_mib", "{:.0f}")]
+        if with_renders:
+            render = ours.get("render")
+            summary.append("-" if render is None else f"{render:.2f}")
         out.append(f"| {name} | {ours['primitives']:,} | " + " | ".join(cells + summary) + " |")
     out += [
         "",
@@ -245,6 +295,12 @@ def main(argv=None):
                         help="the Embree anchor command ('' for none)")
     parser.add_argument("--tinybvh", default=str(shared / "bench" / "tinybvh-compare"),
                         help="the tinybvh anchor command ('' for none)")
+    parser.add_argument("--renders", action="store_true",
+                        help="also time a whole render of each scene against embree-render's")
+    parser.add_argument("--render-reps", type=int, default=3,
+                        help="renders per tracer and scene; the least time counts (default 3)")
+    parser.add_argument("--embree-render", default=str(shared / "bench" / "embree-render"),
+                        help="the Embree render command, for --renders")
     parser.add_argument("--plot", type=Path, help="draw the curve into this PNG")
     parser.add_argument("--title", default="The protocol's ray sets against scene size",
                         help="the plot's title")
@@ -260,6 +316,8 @@ def main(argv=None):
             if command and not os.access(command, os.X_OK):
                 print(f"scale-curve: {command} is not there: no {anchor} figures", file=sys.stderr)
                 setattr(args, anchor, None)
+        if args.renders and not os.access(args.embree_render, os.X_OK):
+            raise Failure(f"--renders: {args.embree_render} is not there")
         args.dir.mkdir(parents=True, exist_ok=True)
         scenes = ([] if args.no_mount else [("mount", n) for n in args.mount]) + (
             [] if args.no_balls else [("balls", n) for n in args.balls]

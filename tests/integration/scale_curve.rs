@@ -26,6 +26,19 @@ awk '$2 == "p3trace-best" {{ printf "%s {name}-best %s %s %d %s %.2f\n", $1, $3,
     path.display().to_string()
 }
 
+/// A stand-in for `embree-render --best`: a best line at twice p3trace's least render time,
+/// which the script kept for the same scene just before.
+fn stand_in_render(dir: &Path) -> String {
+    let path = dir.join("embree-render.sh");
+    let script = r##"#!/bin/sh
+# usage: SCENE.p3f --threads 1 --best --reps N
+awk '/^# scale-curve render_s/ { printf "scene 512 512 1 best %.9f 1000 1.0\n", 2 * $4 }' "${1%.p3f}.render.p3trace.txt"
+"##;
+    std::fs::write(&path, script).unwrap();
+    std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755)).unwrap();
+    path.display().to_string()
+}
+
 /// The script with the flags `flags` (split at spaces) and the options `options`, each a
 /// flag and its value (a path, which may hold a space).
 fn curve(flags: &str, options: &[(&str, &str)]) -> Output {
@@ -105,6 +118,31 @@ fn the_curve_gives_each_scene_its_ratios_build_times_and_memory() {
     assert!(run.status.success(), "{}", stderr(&run));
     assert_eq!(stdout(&run), table);
     assert!(plot.exists());
+
+    // --renders: a column of Embree's least render time over p3trace's, here twice it.
+    let embree_render = stand_in_render(&dir);
+    let options = [
+        ("--dir", out.as_str()),
+        ("--embree", &embree),
+        ("--tinybvh", ""),
+        ("--p3trace", binary),
+        ("--embree-render", &embree_render),
+    ];
+    let run = curve(
+        "--no-balls --mount 1 --reps 1 --renders --render-reps 2",
+        &options,
+    );
+    assert!(run.status.success(), "{}", stderr(&run));
+    let table = stdout(&run);
+    assert!(table.starts_with("| scene |") && table.lines().next().unwrap().ends_with(" render |"));
+    let row = table.lines().find(|l| l.starts_with("| mount_1 | 12 |"));
+    assert!(row.is_some_and(|l| l.ends_with(" | 2.00 |")), "{table}");
+    let kept = std::fs::read_to_string(dir.join("mount_1.render.p3trace.txt")).unwrap();
+    assert_eq!(
+        kept.lines().filter(|l| l.starts_with('{')).count(),
+        2,
+        "{kept}"
+    );
 
     // Hits that differ by 100, within 0.05% of the rays (not of mount_1's 21,928 blocked
     // shadow rays): they agree. By 5,000, beyond it: the tables, then exit 1.
