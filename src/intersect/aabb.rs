@@ -9,7 +9,7 @@
 
 use glam::Vec3;
 
-use super::{first_root_in, first_root_in_lanes};
+use super::{first_root_in, first_root_in_lanes, gather8};
 use super::{
     Aabb, LeafPack, PackOf, PacketHits, PacketQuery, RayQuery, ShapeHit, ShapeHit8, Shapes,
     SurfacePoint, Vec3s,
@@ -194,10 +194,8 @@ impl LeafPack for Boxes {
 
 impl PackOf<Boxes> for BoxPack8 {
     fn pack(storage: &Boxes, indices: impl Iterator<Item = usize>) -> Option<BoxPack8> {
-        let boxes: Vec<(Vec3, Vec3)> = indices
-            .map(|i| (storage.min.get(i), storage.max.get(i)))
-            .collect();
-        Some(BoxPack8::new(&boxes))
+        let (boxes, n) = gather8(indices.map(|i| (storage.min.get(i), storage.max.get(i))));
+        Some(BoxPack8::new(&boxes[..n]))
     }
 
     #[inline]

@@ -12,7 +12,9 @@ use super::triangle::{
 };
 #[cfg(doc)]
 use super::TrianglePack8;
-use super::{IntersectOptions, PackOf, PacketHits, PacketQuery, RayQuery, ShapeHit8, Triangles};
+use super::{
+    gather8, IntersectOptions, PackOf, PacketHits, PacketQuery, RayQuery, ShapeHit8, Triangles,
+};
 use crate::ray::Ray;
 use crate::simd::{
     table_code, table_entry, table_halves, Codes8, F32x8, F32xP, LaneBits, Mask8, TABLE,
@@ -164,7 +166,7 @@ fn leaf_hits<const FRAME: usize>(query: &RayQuery, pack: &MeshPack8, t_max: f32)
 
 impl PackOf<Triangles> for MeshPack8 {
     fn pack(storage: &Triangles, indices: impl Iterator<Item = usize>) -> Option<MeshPack8> {
-        let (triangles, n) = storage.pack_vertices(indices);
+        let (triangles, n) = gather8(indices.map(|i| storage.vertices(i)));
         MeshPack8::new(&triangles[..n])
     }
 

@@ -362,6 +362,22 @@ impl PackLayout {
     }
 }
 
+/// The (at most eight) values of `values` at the front of an array, and how many there
+/// are: a pack's primitives gathered without a vector of their own.
+///
+/// # Panics
+/// If given more than eight.
+pub(crate) fn gather8<T: Copy + Default>(values: impl Iterator<Item = T>) -> ([T; 8], usize) {
+    let mut gathered = [T::default(); 8];
+    let mut n = 0;
+    for value in values {
+        assert!(n < 8, "a pack holds at most 8 primitives");
+        gathered[n] = value;
+        n += 1;
+    }
+    (gathered, n)
+}
+
 /// Up to eight primitives of the storage `K` side by side, and their kernels; unused
 /// slots are padding that no ray hits.
 pub trait PackOf<K>: Clone + Copy + std::fmt::Debug {

@@ -4,7 +4,7 @@
 
 use glam::{DVec3, Vec3};
 
-use super::{first_root_in, first_root_in_lanes, holds_lanes8};
+use super::{first_root_in, first_root_in_lanes, gather8, holds_lanes8};
 use super::{
     gamma, trusted_box, Aabb, BoxPack8, Hits8, IntersectOptions, LeafPack, PackOf, PacketHits,
     PacketQuery, RayQuery, Rays8, ShapeHit, ShapeHit8, Shapes, SurfacePoint, SurfacePoint8,
@@ -253,10 +253,9 @@ impl LeafPack for Spheres {
 
 impl PackOf<Spheres> for SpherePack8 {
     fn pack(storage: &Spheres, indices: impl Iterator<Item = usize>) -> Option<SpherePack8> {
-        let spheres: Vec<(Vec3, f32)> = indices
-            .map(|i| (storage.records[i].centre, storage.records[i].radius))
-            .collect();
-        Some(SpherePack8::new(&spheres))
+        let record = |i: usize| (storage.records[i].centre, storage.records[i].radius);
+        let (spheres, n) = gather8(indices.map(record));
+        Some(SpherePack8::new(&spheres[..n]))
     }
 
     #[inline(always)]

@@ -50,8 +50,8 @@ use std::ops::{Mul, Sub};
 use glam::{DVec3, Vec3};
 
 use super::{
-    gamma, trusted_box, Aabb, BoxPack8, BoxRays, Hits8, IntersectOptions, LeafPack, MeshPack8,
-    PackOf, PacketHits, PacketQuery, RayQuery, ShapeHit, ShapeHit8, ShapeHits, Shapes,
+    gamma, gather8, trusted_box, Aabb, BoxPack8, BoxRays, Hits8, IntersectOptions, LeafPack,
+    MeshPack8, PackOf, PacketHits, PacketQuery, RayQuery, ShapeHit, ShapeHit8, ShapeHits, Shapes,
     SurfacePoint, SurfacePoint8,
 };
 use crate::ray::{Ray, RayPacket};
@@ -853,25 +853,6 @@ impl Triangles {
         self.corners[i].map(|c| self.positions[c as usize])
     }
 
-    /// The vertices of the triangles `indices` (at most eight) for a pack, and how many
-    /// they are: gathered in place, not in a vector allocated for each pack.
-    ///
-    /// # Panics
-    /// If given more than eight triangles.
-    pub(super) fn pack_vertices(
-        &self,
-        indices: impl Iterator<Item = usize>,
-    ) -> ([[Vec3; 3]; 8], usize) {
-        let mut triangles = [[Vec3::ZERO; 3]; 8];
-        let mut n = 0;
-        for i in indices {
-            assert!(n < 8, "a pack holds at most 8 triangles");
-            triangles[n] = self.vertices(i);
-            n += 1;
-        }
-        (triangles, n)
-    }
-
     /// The edges `p1 - p0` and `p2 - p0` of triangle `i`, and its vertex `p0`.
     #[inline(always)]
     fn edges(&self, i: usize) -> ([Vec3; 2], Vec3) {
@@ -913,7 +894,7 @@ impl LeafPack for Triangles {
 
 impl PackOf<Triangles> for TrianglePack8 {
     fn pack(storage: &Triangles, indices: impl Iterator<Item = usize>) -> Option<TrianglePack8> {
-        let (triangles, n) = storage.pack_vertices(indices);
+        let (triangles, n) = gather8(indices.map(|i| storage.vertices(i)));
         Some(TrianglePack8::new(&triangles[..n]))
     }
 
