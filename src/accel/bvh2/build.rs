@@ -494,11 +494,11 @@ fn bin_of(place: f32) -> usize {
     (unsafe { clamped.to_int_unchecked::<u32>() }) as usize
 }
 
-/// Moves the items whose bin on `AXIS` is at most `last_left` to the front, from both
-/// ends, so that only the misplaced move; each item's side from its place on `AXIS`
-/// alone, computed as the binning computed that lane. Returns how many went left and
-/// each side's centroids as a bin's box (in vectors: the boxes of `Vec3` blend their
-/// fourth lane at each step).
+/// Moves the items whose bin on `AXIS` is at most `last_left` to the front, in one pass
+/// (from both ends was slower: docs/did-not-pay.md), each item's side from its place on
+/// `AXIS` alone, computed as the binning computed that lane. Returns how many went left
+/// and each side's centroids, gathered on the way as a bin's box (in vectors: the boxes
+/// of `Vec3` blend their fourth lane at each step).
 fn partition<const AXIS: usize>(
     items: &mut [Item],
     axis_low: f32,
