@@ -72,6 +72,12 @@ struct Item {
 }
 
 impl Item {
+    /// The centroid, as a vector (its lanes as [`Item::centroid`] computes them).
+    #[inline(always)]
+    fn centre(&self) -> Vec3A {
+        0.5 * (Vec3A::from(self.bounds.min) + Vec3A::from(self.bounds.max))
+    }
+
     /// The centroid's coordinate on `axis` (as `Aabb::centre` computes it).
     fn centroid(&self, axis: usize) -> f32 {
         0.5 * (self.bounds.min[axis] + self.bounds.max[axis])
@@ -383,15 +389,11 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
     let centroids = boxes.centroids;
     let extent = centroids.extent();
     let node_area = boxes.bounds.area().max(f32::MIN_POSITIVE);
-    // An item's bin on each axis, the three side by side in the lanes of a vector: where
-    // its centroid falls, and the centroid itself. The partition below computes the lane
-    // of the split's axis as this does, so that an item goes to the side of its bin.
+    // An item's place on each axis, in bins, the three side by side in the lanes of a
+    // vector: `(centre - low) * scale`. The partition below computes the lane of the
+    // split's axis as this does, so that an item goes to the side of its bin.
     let low = Vec3A::from(centroids.min);
     let scale = BINS as f32 / Vec3A::from(extent);
-    let place_of = |bounds: &Aabb| {
-        let centre = 0.5 * (Vec3A::from(bounds.min) + Vec3A::from(bounds.max));
-        ((centre - low) * scale, centre)
-    };
     // Every axis's bins in one pass over the items; the boxes' unions are exact (an axis
     // without extent fills bins that are never read), so a large node's chunks are binned
     // on rayon's threads and their bins merged. A bit a bin says it holds items.
@@ -400,7 +402,7 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
         let mut used = [0u32; 3];
         for it in items {
             let (min, max) = (Vec3A::from(it.bounds.min), Vec3A::from(it.bounds.max));
-            let (place, _) = place_of(&it.bounds);
+            let place = (it.centre() - low) * scale;
             for (axis, axis_bins) in bins.iter_mut().enumerate() {
                 let i = bin_of(place[axis]);
                 axis_bins[i] = add(axis_bins[i], (min, max, 1));
@@ -505,22 +507,15 @@ fn partition<const AXIS: usize>(
     axis_scale: f32,
     last_left: usize,
 ) -> (usize, Bin, Bin) {
-    let goes_left = |it: &Item| {
-        let on_axis = 0.5 * (it.bounds.min[AXIS] + it.bounds.max[AXIS]);
-        bin_of((on_axis - axis_low) * axis_scale) <= last_left
-    };
-    let centre = |it: &Item| {
-        let c = 0.5 * (Vec3A::from(it.bounds.min) + Vec3A::from(it.bounds.max));
-        (c, c, 1)
-    };
     let (mut k, mut left, mut right) = (0, EMPTY_BIN, EMPTY_BIN);
     for i in 0..items.len() {
-        if goes_left(&items[i]) {
-            left = add(left, centre(&items[i]));
+        let centre = items[i].centre();
+        if bin_of((centre[AXIS] - axis_low) * axis_scale) <= last_left {
+            left = add(left, (centre, centre, 1));
             swap_items(items, k, i);
             k += 1;
         } else {
-            right = add(right, centre(&items[i]));
+            right = add(right, (centre, centre, 1));
         }
     }
     (k, left, right)
