@@ -16,8 +16,13 @@ per scene:
   Embree's render time (../shared/bench/embree-render --best, its fastest mode) over
   p3trace's (`render --json`'s render_s), the least of --render-reps each.
 
-Results are kept in DIR (default target/scale-curve), one file per scene and tracer, with a
-last comment line `# scale-curve peak_rss_kib K wall_s S`; --reuse reads a scene's results
+With --rounds N every tracer runs N times per scene, in turn (p3trace, Embree, tinybvh, then
+the renders, then again), and each figure is its tracer's best over the rounds: the fastest
+Mrays/s per set, the least build and render time, the largest peak memory. A shared machine's
+load comes and goes over minutes; rounds give each tracer the same spread of it.
+
+Results are kept in DIR (default target/scale-curve), one file per scene, tracer and round
+(`NAME.TRACER.txt`, then `NAME.TRACER.r2.txt` and on), with a last comment line `# scale-curve peak_rss_kib K wall_s S`; --reuse reads a scene's results
 from there instead of running it again, so a long curve can be resumed or redrawn. --plot
 draws Mrays/s against the primitive count, one panel per ray set, one line per tracer and
 family (matplotlib, scripts/requirements.txt). --markdown writes the tables for BENCHMARKS.md.
@@ -121,8 +126,24 @@ def agree(ours, theirs):
     return hits_ok and tsum_ok
 
 
+def kept(name, round_):
+    """The file name of round `round_`'s result of `name` (a scene and tracer)."""
+    return f"{name}.txt" if round_ == 1 else f"{name}.r{round_}.txt"
+
+
+def best_of(rounds):
+    """One tracer's results of several rounds as one: each figure at its best."""
+    best = dict(rounds[0])
+    best["sets"] = {s: max((r["sets"][s] for r in rounds), key=lambda x: x["mrays"]) for s in SETS}
+    builds = [r["build_s"] for r in rounds if r["build_s"] is not None]
+    best["build_s"] = min(builds) if builds else None
+    best["peak_mib"] = max(r["peak_mib"] for r in rounds)
+    return best
+
+
 def measure(args, family, size):
-    """Generates one scene and returns {tracer: result} for the tracers that take it."""
+    """Generates one scene and returns {tracer: result} for the tracers that take it, each
+    the best of its --rounds."""
     name = f"{family}_{size}"
     scene = args.dir / f"{name}.p3f"
     flag = "--level" if family == "mount" else "--depth"
@@ -133,16 +154,23 @@ def measure(args, family, size):
         commands["embree"] = [args.embree]
     if args.tinybvh and family == "mount":
         commands["tinybvh"] = [args.tinybvh]
-    results = {}
-    for tracer, command in commands.items():
-        path = args.dir / f"{name}.{tracer}.txt"
-        text = path.read_text() if args.reuse and path.exists() else None
-        if text is None or not TRAILER.search(text):
-            print(f"scale-curve: {name}: {tracer}", file=sys.stderr, flush=True)
-            text = run(command + [scene, "--threads", "1", "--reps", str(args.reps)], path)
-        results[tracer] = parse(tracer, text, path)
+    rounds = {tracer: [] for tracer in commands}
+    render_times = []
+    for round_ in range(1, args.rounds + 1):
+        for tracer, command in commands.items():
+            path = args.dir / kept(f"{name}.{tracer}", round_)
+            text = path.read_text() if args.reuse and path.exists() else None
+            if text is None or not TRAILER.search(text):
+                print(f"scale-curve: {name}: {tracer}, round {round_}", file=sys.stderr, flush=True)
+                text = run(command + [scene, "--threads", "1", "--reps", str(args.reps)], path)
+            rounds[tracer].append(parse(tracer, text, path))
+        if args.renders:
+            render_times.append(renders(args, name, scene, round_))
+    results = {tracer: best_of(r) for tracer, r in rounds.items()}
     if args.renders:
-        results["p3trace"]["render"] = renders(args, name, scene)
+        results["p3trace"]["render"] = min(t["embree"] for t in render_times) / min(
+            t["p3trace"] for t in render_times
+        )
     return name, family, results
 
 
@@ -159,15 +187,15 @@ def least_render(tracer, text, where):
     return min(times)
 
 
-def renders(args, name, scene):
-    """Embree's least render time over p3trace's, each kept in DIR as its runs' output
-    and a last line `# scale-curve render_s S`."""
+def renders(args, name, scene, round_):
+    """p3trace's and Embree's least render times of round `round_`, each kept in DIR as its
+    runs' output and a last line `# scale-curve render_s S`."""
     least = {}
     for tracer in ("p3trace", "embree"):
-        path = args.dir / f"{name}.render.{tracer}.txt"
+        path = args.dir / kept(f"{name}.render.{tracer}", round_)
         text = path.read_text() if args.reuse and path.exists() else None
         if text is None or not RENDER_TRAILER.search(text):
-            print(f"scale-curve: {name}: {tracer} render", file=sys.stderr, flush=True)
+            print(f"scale-curve: {name}: {tracer} render, round {round_}", file=sys.stderr, flush=True)
             if tracer == "p3trace":
                 image = args.dir / f"{name}.png"
                 command = [args.p3trace, "render", scene, "--threads", "1", "--accel", "bvh",
@@ -181,7 +209,7 @@ def renders(args, name, scene):
             text += f"# scale-curve render_s {least_render(tracer, text, path)}\n"
             path.write_text(text)
         least[tracer] = float(RENDER_TRAILER.search(text)[1])
-    return least["embree"] / least["p3trace"]
+    return least
 
 
 def geomean(values):
@@ -284,6 +312,8 @@ def main(argv=None):
     parser.add_argument("--no-mount", action="store_true", help="no meshes")
     parser.add_argument("--no-balls", action="store_true", help="no sphereflakes")
     parser.add_argument("--reps", type=int, default=7, help="passes per set; the best counts (default 7)")
+    parser.add_argument("--rounds", type=int, default=1,
+                        help="runs of every tracer per scene, in turn; the best counts (default 1)")
     parser.add_argument("--dir", type=Path, default=REPO / "target" / "scale-curve",
                         help="where the scenes and results go (default target/scale-curve)")
     parser.add_argument("--reuse", action="store_true",
@@ -316,6 +346,8 @@ def main(argv=None):
             if command and not os.access(command, os.X_OK):
                 print(f"scale-curve: {command} is not there: no {anchor} figures", file=sys.stderr)
                 setattr(args, anchor, None)
+        if args.rounds < 1:
+            raise Failure(f"--rounds {args.rounds}: at least 1")
         if args.renders and not os.access(args.embree_render, os.X_OK):
             raise Failure(f"--renders: {args.embree_render} is not there")
         args.dir.mkdir(parents=True, exist_ok=True)

@@ -144,6 +144,44 @@ fn the_curve_gives_each_scene_its_ratios_build_times_and_memory() {
         "{kept}"
     );
 
+    // --rounds 2: every tracer twice, in turn, each round's results kept; each figure is
+    // its tracer's best over the rounds.
+    let run = curve(
+        "--no-balls --mount 1 --reps 1 --renders --render-reps 1 --rounds 2",
+        &options,
+    );
+    assert!(run.status.success(), "{}", stderr(&run));
+    let table = stdout(&run);
+    let best_rate = |file: &str, set: &str| -> f64 {
+        let text = std::fs::read_to_string(dir.join(file)).unwrap();
+        let line = text.lines().find(|l| {
+            let fields: Vec<&str> = l.split_whitespace().collect();
+            fields.len() == 7 && fields[0] == set && fields[1].ends_with("-best")
+        });
+        line.unwrap()
+            .split_whitespace()
+            .last()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    for tracer in ["p3trace", "embree"] {
+        let rates: Vec<String> = ["primary", "shadow", "reflection"]
+            .iter()
+            .map(|set| {
+                let best = best_rate(&format!("mount_1.{tracer}.txt"), set)
+                    .max(best_rate(&format!("mount_1.{tracer}.r2.txt"), set));
+                format!("{best:.2}")
+            })
+            .collect();
+        let row = format!("| mount_1 | {tracer} | {} |", rates.join(" | "));
+        assert!(table.contains(&row), "{row}\n{table}");
+    }
+    assert!(dir.join("mount_1.render.p3trace.r2.txt").exists());
+    assert!(dir.join("mount_1.render.embree.r2.txt").exists());
+    let run = curve("--no-balls --mount 1 --rounds 0", &options);
+    assert_eq!(run.status.code(), Some(2), "{}", stderr(&run));
+
     // Hits that differ by 100, within 0.05% of the rays (not of mount_1's 21,928 blocked
     // shadow rays): they agree. By 5,000, beyond it: the tables, then exit 1.
     let against = |extra: u32| {
