@@ -42,13 +42,14 @@ impl<K, P: PackOf<K>> Packs<K, P> {
     /// that does not fit in one pack ([`PackOf::pack`]) takes two after the others, the
     /// first holding [`CHAIN_HEAD`] and going on in the second ([`PackOf::continues`]),
     /// and its own place a pack of its first primitive, which nothing refers to. Gives
-    /// those runs' `i` and the places of their first packs.
+    /// the place of the first of the `n` packs, and those runs' `i` and the places of
+    /// their first packs.
     fn extend<'p>(
         &mut self,
         storage: &K,
         n: usize,
         run: impl Fn(usize) -> &'p [PrimId] + Sync,
-    ) -> HashMap<usize, usize>
+    ) -> (usize, HashMap<usize, usize>)
     where
         K: Sync,
         P: Send,
@@ -56,6 +57,7 @@ impl<K, P: PackOf<K>> Packs<K, P> {
         // Room for a few runs in two packs (a mesh's leaves share their vertices: one in
         // 200 of `gen mount --level 10`'s holds more than twelve), so that those do not
         // make the arrays grow, which would copy them; the rest of the room is kept.
+        let first = self.packs.len();
         let room = n + if P::CHAINS { 2 * (n / 128) } else { 0 };
         self.packs.reserve_exact(room);
         self.ids.reserve_exact(room);
@@ -89,7 +91,7 @@ impl<K, P: PackOf<K>> Packs<K, P> {
             self.ids.push(lanes(head));
             self.ids.push(lanes(tail));
         }
-        moved
+        (first, moved)
     }
 
     /// How many of the `count` primitives of the leaf whose first pack is `index` that
@@ -385,18 +387,12 @@ macro_rules! define_leaves {
                         let storage = &geometry.$field;
                         let packs = &mut self.$field;
                         type K = crate::intersect::$storage;
-                        match layout.compact::<K>(storage.len()) {
-                            false => {
-                                let first = packs.full.packs.len();
-                                let moved = packs.full.extend(storage, n, run);
-                                (pack_code(kind, false), first, moved)
-                            }
-                            true => {
-                                let first = packs.compact.packs.len();
-                                let moved = packs.compact.extend(storage, n, run);
-                                (pack_code(kind, true), first, moved)
-                            }
-                        }
+                        let compact = layout.compact::<K>(storage.len());
+                        let (first, moved) = match compact {
+                            false => packs.full.extend(storage, n, run),
+                            true => packs.compact.extend(storage, n, run),
+                        };
+                        (pack_code(kind, compact), first, moved)
                     })*
                     _ => unreachable!("{kind:?} is not packed"),
                 }
