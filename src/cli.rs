@@ -340,7 +340,7 @@ pub struct Settings {
     /// Ignore the scene's skybox (`env`): rays that leave the scene take the `bclr` colour.
     #[arg(long)]
     pub no_skybox: bool,
-    /// Worker threads (default: one per core).
+    /// Worker threads, which build the structure too (default: one per core).
     #[arg(long, value_name = "N", allow_negative_numbers = true,
           value_parser = whole::<u32>(1..=1024))]
     pub threads: Option<u32>,
@@ -453,8 +453,8 @@ pub struct BenchArgs {
     #[arg(long, value_name = "N", default_value_t = 0, allow_negative_numbers = true,
           value_parser = whole::<u64>(0..=u64::MAX))]
     pub seed: u64,
-    /// Threads of the multi-threaded runs (a 1-thread run always comes first).
-    /// Default: one per core.
+    /// Threads of the multi-threaded runs (a 1-thread run always comes first), and of
+    /// the structure's build. Default: one per core.
     #[arg(long, value_name = "N", allow_negative_numbers = true,
           value_parser = whole::<u32>(1..=1024))]
     pub threads: Option<u32>,

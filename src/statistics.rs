@@ -32,8 +32,8 @@ fn program_and_cpu() -> (Value, Value) {
     (program, cpu)
 }
 
-fn structure(name: &str, build_time: Duration, stats: &[String]) -> Value {
-    json!({ "name": name, "build_s": build_time.as_secs_f64(), "stats": stats })
+fn structure(name: &str, (time, threads): (Duration, usize), stats: &[String]) -> Value {
+    json!({ "name": name, "build_s": time.as_secs_f64(), "build_threads": threads, "stats": stats })
 }
 
 /// A finished render of `scene` with `options`, written to `output`.
@@ -63,7 +63,11 @@ pub fn render(
         "profile": format!("{:?}", options.shade.profile).to_lowercase(),
         "max_depth": options.shade.max_depth,
         "threads": report.threads,
-        "structure": structure(&report.accel_name, report.build_time, &report.accel_stats),
+        "structure": structure(
+            &report.accel_name,
+            (report.build_time, report.build_threads),
+            &report.accel_stats
+        ),
         "render_s": seconds,
         "rays": {
             "primary": rays.primary,
@@ -107,6 +111,7 @@ pub struct BenchRun<'a> {
     pub resolution: (u32, u32),
     pub structure: &'a str,
     pub build_time: Duration,
+    pub build_threads: usize,
     pub stats: &'a [String],
     pub reps: u32,
     pub lines: &'a [Line],
@@ -137,7 +142,7 @@ pub fn bench(run: &BenchRun) -> Value {
         "command": "bench",
         "scene": run.scene.name,
         "resolution": [run.resolution.0, run.resolution.1],
-        "structure": structure(run.structure, run.build_time, run.stats),
+        "structure": structure(run.structure, (run.build_time, run.build_threads), run.stats),
         "reps": run.reps,
         "lines": lines,
     });

@@ -322,11 +322,13 @@ pub struct Tracer<'s> {
     /// What the profile chose in the primitives' tests: every query carries it.
     options: IntersectOptions,
     build_time: Duration,
+    build_threads: usize,
 }
 
 impl<'s> Tracer<'s> {
     /// Builds the structure `options` asks for over `geometry`, whose queries test the
-    /// primitives as `options.intersect` says.
+    /// primitives as `options.intersect` says, on the threads of the rayon pool it is
+    /// called in (every core's, outside one): the same structure on any number.
     pub fn new(geometry: &'s Geometry, options: &AccelOptions) -> Self {
         let start = Instant::now();
         let intersect = bounds::with_margins(options.intersect, geometry);
@@ -344,6 +346,7 @@ impl<'s> Tracer<'s> {
             shutter: options.shutter,
             options: intersect,
             build_time: start.elapsed(),
+            build_threads: rayon::current_num_threads(),
         }
     }
 
@@ -371,6 +374,11 @@ impl<'s> Tracer<'s> {
     /// How long building the structure took.
     pub fn build_time(&self) -> Duration {
         self.build_time
+    }
+
+    /// The threads the structure was built on.
+    pub fn build_threads(&self) -> usize {
+        self.build_threads
     }
 
     /// The closest hit with `t` in `(t_min, t_max)`.

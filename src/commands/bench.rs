@@ -17,11 +17,18 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode, Failure> {
     // The protocol's rays are made in the file's coordinates, as the Embree harness's.
     let scene = load_scene(&args.scene, args.seed, Frame::File)?;
     let options = args.accel.options(scene.accel);
-    let tracer = Tracer::new(&scene.geometry, &options);
-    let (name, stats, build_time) = (tracer.name(), tracer.stats(), tracer.build_time());
-    let sets = bench::ray_sets(&scene, &tracer);
     let cores = p3trace::machine::logical_cpus();
     let threads = args.threads.map_or(cores, |n| n as usize);
+    // Built on the most threads the runs trace with, as Embree's harness builds on its
+    // device's: with --threads 1 the build time is one core's.
+    let build_pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Failure::Run(format!("cannot start the worker threads: {e}")))?;
+    let tracer = build_pool.install(|| Tracer::new(&scene.geometry, &options));
+    drop(build_pool);
+    let (name, stats, build_time) = (tracer.name(), tracer.stats(), tracer.build_time());
+    let sets = bench::ray_sets(&scene, &tracer);
     let (width, height) = bench::resolution(&scene);
     let say = human_output(is_stdout(args.json.as_deref()));
     say("# p3trace bench: trace-throughput protocol (PROTOCOL.md)");
@@ -86,6 +93,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode, Failure> {
             resolution: (width, height),
             structure: &name,
             build_time,
+            build_threads: tracer.build_threads(),
             stats: &stats,
             reps: args.reps,
             lines: &lines,

@@ -17,7 +17,7 @@ use p3trace::generate::random;
 use p3trace::imaging::false_colour::Scale;
 use p3trace::imaging::format::{ImageOutput, OutputFormat};
 use p3trace::imaging::openexr::Placement;
-use p3trace::plural::noun;
+use p3trace::plural::{count, noun};
 use p3trace::render::cost::{self, CostMap};
 use p3trace::render::progress::Progress;
 use p3trace::render::region::Region;
@@ -187,9 +187,10 @@ fn summarise(
     let say = human_output(is_stdout(args.json.as_deref()) || output.path.is_none());
     if args.stats {
         say(&format!(
-            "{}: built in {:.3} s",
+            "{}: built in {:.3} s on {}",
             report.accel_name,
-            report.build_time.as_secs_f64()
+            report.build_time.as_secs_f64(),
+            count(report.build_threads as u64, "thread", "threads")
         ));
         for line in &report.accel_stats {
             say(&format!("  {line}"));

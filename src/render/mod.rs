@@ -226,6 +226,8 @@ pub struct RenderReport {
     /// The worker threads that rendered.
     pub threads: usize,
     pub build_time: Duration,
+    /// The threads the structure was built on.
+    pub build_threads: usize,
     /// The structure's name and statistics lines.
     pub accel_name: String,
     pub accel_stats: Vec<String>,
@@ -253,6 +255,14 @@ impl RenderWork {
             all
         })
     }
+}
+
+/// A pool of `threads` worker threads, one per core without a number.
+fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| format!("cannot start the worker threads: {e}"))
 }
 
 /// Renders `scene` with the structure `options.accel` asks for.
@@ -300,7 +310,8 @@ pub struct Stage<'s> {
 }
 
 impl<'s> Stage<'s> {
-    /// Builds the structure and loads the skybox side by side, on rayon's threads.
+    /// Builds the structure and loads the skybox side by side, on as many threads as the
+    /// render may use (`options.threads`): a job given one core uses one.
     pub fn new(scene: &'s Scene, options: &RenderOptions) -> Self {
         let mut warnings = Vec::new();
         // Moving primitives are bounded over the whole shutter, and tested as the profile
@@ -313,24 +324,32 @@ impl<'s> Stage<'s> {
             },
             ..options.accel
         };
-        let (loaded, tracer) = rayon::join(
-            || match (&scene.skybox, options.skybox) {
-                (Some(folder), true) => {
-                    Some(folder.find().and_then(|dir| Ok((Skybox::load(&dir)?, dir))))
-                }
-                _ => None,
-            },
-            || {
-                let tracer = Tracer::new(&scene.geometry, &accel_options);
-                match options.mode {
-                    // Only the stream renderer asks the rooms (`accel::interior`).
-                    RenderMode::Stream => {
-                        tracer.with_rooms(|m| scene.materials[m as usize].transmittance > 0.0)
+        let build = || {
+            rayon::join(
+                || match (&scene.skybox, options.skybox) {
+                    (Some(folder), true) => {
+                        Some(folder.find().and_then(|dir| Ok((Skybox::load(&dir)?, dir))))
                     }
-                    RenderMode::Scalar => tracer,
-                }
-            },
-        );
+                    _ => None,
+                },
+                || {
+                    let tracer = Tracer::new(&scene.geometry, &accel_options);
+                    match options.mode {
+                        // Only the stream renderer asks the rooms (`accel::interior`).
+                        RenderMode::Stream => {
+                            tracer.with_rooms(|m| scene.materials[m as usize].transmittance > 0.0)
+                        }
+                        RenderMode::Scalar => tracer,
+                    }
+                },
+            )
+        };
+        // A pool that cannot start leaves the build to rayon's own: the render that
+        // follows fails to start its pool, and says why.
+        let (loaded, tracer) = match worker_pool(options.threads) {
+            Ok(pool) => pool.install(build),
+            Err(_) => build(),
+        };
         let (skybox, skybox_folder) = match loaded {
             Some(Ok((sky, dir))) => {
                 warnings.extend(
@@ -378,10 +397,7 @@ impl<'s> Stage<'s> {
         );
         let camera = Camera::new(camera, options.width, options.height);
 
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(options.threads.unwrap_or(0))
-            .build()
-            .map_err(|e| format!("cannot start the worker threads: {e}"))?;
+        let pool = worker_pool(options.threads)?;
         let region = options.region();
         // A counted render traces the whole frame's tiles that meet its region, in full: a
         // tile's packets, and so its pixels' counts, are then the whole frame's.
@@ -428,6 +444,7 @@ impl<'s> Stage<'s> {
             elapsed,
             threads,
             build_time,
+            build_threads: tracer.build_threads(),
             accel_name,
             accel_stats,
             skybox: self.skybox_folder.clone(),

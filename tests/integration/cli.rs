@@ -763,16 +763,31 @@ fn render_and_bench_write_their_statistics_as_json() {
     assert!(digits.contains(&format!(" {total} rays")), "{digits}");
 
     // To stdout with `-`, the people's line moves to stderr; scalar mode counts alike.
-    let run = render(&["--json", "-", "--spp", "2", "--mode", "scalar", "--stats"]);
+    // --threads bounds the build too: a job given one core uses one.
+    let run = render(&[
+        "--json",
+        "-",
+        "--spp",
+        "2",
+        "--mode",
+        "scalar",
+        "--stats",
+        "--threads",
+        "1",
+    ]);
     let scalar = json(&stdout(&run));
     assert_eq!(scalar["rays"], *rays);
     assert_eq!(scalar["mode"], "scalar");
+    assert_eq!(scalar["threads"], 1);
+    assert_eq!(scalar["structure"]["build_threads"], 1);
     assert!(stderr(&run).contains(" rays, "), "{}", stderr(&run));
     assert!(
-        stderr(&run).contains("bvh sah: built in"),
+        stderr(&run).contains("bvh sah: built in") && stderr(&run).contains(" s on 1 thread\n"),
         "{}",
         stderr(&run)
     );
+    let two = render(&["--json", "-", "--threads", "2"]);
+    assert_eq!(json(&stdout(&two))["structure"]["build_threads"], 2);
 
     // bench: every protocol line, the same as the text lines.
     let run = p3trace(&[
@@ -789,6 +804,8 @@ fn render_and_bench_write_their_statistics_as_json() {
     let bench = json(&stdout(&run));
     assert_eq!(bench["command"], "bench");
     assert_eq!(bench["reps"], 1);
+    // Built on the most threads it traces with, as Embree's harness builds.
+    assert_eq!(bench["structure"]["build_threads"], 2);
     let lines = bench["lines"].as_array().unwrap();
     let text: Vec<String> = stderr(&run)
         .lines()
