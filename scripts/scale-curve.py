@@ -9,7 +9,8 @@ and, on the meshes, with tinybvh (../shared/bench/tinybvh-compare, triangles onl
 per scene:
 
 - the ratio p3trace-best / the best anchor per ray set, their geometric mean and the lowest,
-  and p3trace's and Embree's build time and peak memory;
+  and p3trace's and Embree's build time (each on the one thread it traces with) and peak
+  memory;
 - each tracer's Mrays/s per set, its build time and the peak resident memory of its
   process (the scene, the structure and the protocol's rays; `wait4`'s maxrss);
 - with --renders, a whole Whitted render of the scene (its resolution, 1 spp, 1 thread):
@@ -22,8 +23,9 @@ Mrays/s per set, the least build and render time, the largest peak memory. A sha
 load comes and goes over minutes; rounds give each tracer the same spread of it.
 
 Results are kept in DIR (default target/scale-curve), one file per scene, tracer and round
-(`NAME.TRACER.txt`, then `NAME.TRACER.r2.txt` and on), with a last comment line `# scale-curve peak_rss_kib K wall_s S`; --reuse reads a scene's results
-from there instead of running it again, so a long curve can be resumed or redrawn. --plot
+(`NAME.TRACER.txt`, then `NAME.TRACER.r2.txt` and on), with a last comment line
+`# scale-curve peak_rss_kib K wall_s S`; --reuse reads a scene's results from there
+instead of running it again, so a long curve can be resumed or redrawn. --plot
 draws Mrays/s against the primitive count, one panel per ray set, one line per tracer and
 family (matplotlib, scripts/requirements.txt). --markdown writes the tables for BENCHMARKS.md.
 
