@@ -239,10 +239,7 @@ pub fn run(
 ) -> Result<(), String> {
     let mut first: Vec<SetResult> = Vec::new();
     for &n in thread_counts {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .map_err(|e| format!("cannot start the worker threads: {e}"))?;
+        let pool = crate::render::worker_pool(Some(n))?;
         for (k, set) in sets.iter().enumerate() {
             let mut best: Option<SetResult> = None;
             for (api, path) in PATHS {

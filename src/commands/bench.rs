@@ -9,6 +9,7 @@ use crate::{statistics, Failure};
 use p3trace::accel::Tracer;
 use p3trace::plural::count;
 use p3trace::prim::PrimKind;
+use p3trace::render::worker_pool;
 use p3trace::scene::Frame;
 
 pub fn run(args: &BenchArgs) -> Result<ExitCode, Failure> {
@@ -21,10 +22,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode, Failure> {
     let threads = args.threads.map_or(cores, |n| n as usize);
     // Built on the most threads the runs trace with, as Embree's harness builds on its
     // device's: with --threads 1 the build time is one core's.
-    let build_pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| Failure::Run(format!("cannot start the worker threads: {e}")))?;
+    let build_pool = worker_pool(Some(threads)).map_err(Failure::Run)?;
     let tracer = build_pool.install(|| Tracer::new(&scene.geometry, &options));
     drop(build_pool);
     let (name, stats, build_time) = (tracer.name(), tracer.stats(), tracer.build_time());

@@ -258,7 +258,7 @@ impl RenderWork {
 }
 
 /// A pool of `threads` worker threads, one per core without a number.
-fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> {
+pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()
