@@ -68,10 +68,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode, Failure> {
     })
     .map_err(Failure::Run)?;
     let work = if args.stats {
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .map_err(|e| Failure::Run(format!("cannot start a worker thread: {e}")))?;
+        let one = worker_pool(Some(1)).map_err(Failure::Run)?;
         say(&format!("# structure {name}:"));
         for line in &stats {
             say(&format!("#   {line}"));
