@@ -75,12 +75,19 @@ impl Bvh8 {
     ) {
         let (t_min, box_ray) = (query.t_min, BoxRay::new(query.ray.origin, query.inv_dir));
         let mut stack = Stack::<(ChildRef, f32), STACK>::new();
-        stack.push((start, t_min));
-        while let Some((child, t_entry)) = stack.pop() {
-            // Entries beyond the closest hit cannot hold a closer one (ties may).
-            if beyond(t_entry, closest.limit()) {
-                continue;
-            }
+        // The nearest child of the node just tested, entered without the stack: it lies
+        // within the closest hit, which has not moved since its box test.
+        let mut next = Some(start);
+        loop {
+            let child = match next.take() {
+                Some(child) => child,
+                None => match stack.pop() {
+                    // Entries beyond the closest hit cannot hold a closer one (ties may).
+                    Some((child, t_entry)) if !beyond(t_entry, closest.limit()) => child,
+                    Some(_) => continue,
+                    None => break,
+                },
+            };
             if child & LEAF != 0 {
                 self.closest_in_leaf::<C, FRAME, COMPACT>(geometry, child, query, closest, count);
                 continue;
@@ -89,12 +96,23 @@ impl Bvh8 {
             count.node();
             count.boxes(node.count);
             let (hits, entries) = node.entries(&box_ray, t_min, closest.limit());
-            // The hit children sorted on the stack, the nearest on top to be popped next.
+            // The other hit children sorted on the stack, the nearest of them on top: the
+            // order in which the stack gave them all when it held the nearest too.
             let floor = stack.len();
+            let mut nearest: Option<(ChildRef, f32)> = None;
             for_lanes(hits, |k| {
-                self.prefetch_child::<COMPACT>(node.child[k], true);
-                stack.push_sorted(floor, (node.child[k], entries[k]), |e| e.1)
+                let hit = (node.child[k], entries[k]);
+                self.prefetch_child::<COMPACT>(hit.0, true);
+                match nearest {
+                    Some(near) if hit.1 > near.1 => stack.push_sorted(floor, hit, |e| e.1),
+                    Some(near) => {
+                        stack.push_sorted(floor, near, |e| e.1);
+                        nearest = Some(hit);
+                    }
+                    None => nearest = Some(hit),
+                }
             });
+            next = nearest.map(|near| near.0);
         }
     }
 
