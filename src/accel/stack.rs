@@ -56,6 +56,34 @@ impl<T: Copy, const N: usize> Stack<T, N> {
         self.slots[slot].write(item);
         self.len += 1;
     }
+
+    /// One of the items offered since the stack held `floor`: the one of the smallest
+    /// key so far (the later of equal keys) is kept in `nearest` rather than pushed, the
+    /// others pushed as [`Stack::push_sorted`] pushes. A walk enters `nearest` at once and
+    /// then the stack gives the others in the order it would have given them all.
+    ///
+    /// # Panics
+    /// As [`Stack::push`].
+    #[inline(always)]
+    pub fn push_sorted_but_nearest(
+        &mut self,
+        floor: usize,
+        nearest: &mut Option<T>,
+        item: T,
+        key: impl Fn(&T) -> f32,
+    ) {
+        match nearest.take() {
+            Some(near) if key(&item) > key(&near) => {
+                self.push_sorted(floor, item, key);
+                *nearest = Some(near);
+            }
+            Some(near) => {
+                self.push_sorted(floor, near, key);
+                *nearest = Some(item);
+            }
+            None => *nearest = Some(item),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -74,6 +102,31 @@ mod tests {
         let order: Vec<u32> = std::iter::from_fn(|| stack.pop()).map(|e| e.0).collect();
         // Of equal keys, the later push is popped first.
         assert_eq!(order, [4, 2, 3, 1, 9]);
+    }
+
+    #[test]
+    fn the_nearest_kept_aside_and_the_stack_give_the_sorted_order() {
+        let items = [
+            (1, 3.0),
+            (2, 1.0),
+            (3, 2.0),
+            (4, 1.0),
+            (5, 3.0),
+            (6, 0.5),
+            (7, 0.5),
+        ];
+        for n in 1..=items.len() {
+            let mut all = Stack::<(u32, f32), 8>::new();
+            let mut rest = Stack::<(u32, f32), 8>::new();
+            let mut nearest = None;
+            for &item in &items[..n] {
+                all.push_sorted(0, item, |e| e.1);
+                rest.push_sorted_but_nearest(0, &mut nearest, item, |e| e.1);
+            }
+            let order: Vec<u32> = std::iter::from_fn(|| all.pop()).map(|e| e.0).collect();
+            let kept = nearest.into_iter().chain(std::iter::from_fn(|| rest.pop()));
+            assert_eq!(kept.map(|e| e.0).collect::<Vec<_>>(), order, "{n} items");
+        }
     }
 
     #[test]

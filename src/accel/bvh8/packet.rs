@@ -47,12 +47,24 @@ impl Bvh8 {
         // own box tests cull by distance.
         let range_limit = largest(limit, active);
         let mut stack = Stack::<(ChildRef, LaneBits, f32), STACK>::new();
-        stack.push((0, active, t_min));
-        while let Some((child, lanes, t_entry)) = stack.pop() {
-            // Beyond every lane's closest hit: nothing closer inside (ties are visited).
-            if lanes & !beyond_lanes(F32xP::splat(t_entry), limit).bitmask() == 0 {
-                continue;
-            }
+        // The nearest child of the node just tested and its lanes, entered without the
+        // stack: its lanes' closest hits have not moved since their box tests.
+        let mut next = Some((0, active));
+        loop {
+            let (child, lanes) = match next.take() {
+                Some(entered) => entered,
+                None => match stack.pop() {
+                    // Beyond every lane's closest hit: nothing closer inside (ties are
+                    // visited).
+                    Some((child, lanes, t_entry))
+                        if lanes & !beyond_lanes(F32xP::splat(t_entry), limit).bitmask() != 0 =>
+                    {
+                        (child, lanes)
+                    }
+                    Some(_) => continue,
+                    None => break,
+                },
+            };
             let leaf = child & LEAF != 0;
             if leaf
                 && self
@@ -95,11 +107,13 @@ impl Bvh8 {
             count.node(lanes);
             count.boxes(lanes, candidates.count_ones());
             let kept = MaskP::from_bitmask(lanes);
-            // (child, its lanes, their entry) for the children entered, sorted on the stack
-            // with the nearest on top to be popped next. The entry is the range's bound,
-            // found for all eight children at once, where the packet has a range; the
-            // nearest lane's, a reduction over the lanes for each child, where it has none.
+            // (child, its lanes, their entry) for the children entered but the nearest,
+            // sorted on the stack with the nearest of them on top. The entry is the
+            // range's bound, found for all eight children at once, where the packet has a
+            // range; the nearest lane's, a reduction over the lanes for each child, where
+            // it has none.
             let floor = stack.len();
+            let mut nearest: Option<(ChildRef, LaneBits, f32)> = None;
             for_lanes(candidates, |c| {
                 let (min, max) = node.boxes.corners(c);
                 let intervals = box_rays.interval(min, max, lanes_t_min, limit);
@@ -112,9 +126,11 @@ impl Bvh8 {
                             .min_lane(),
                     };
                     self.prefetch_child::<COMPACT>(node.child[c], true);
-                    stack.push_sorted(floor, (node.child[c], hit.bitmask(), entry), |e| e.2);
+                    let entered = (node.child[c], hit.bitmask(), entry);
+                    stack.push_sorted_but_nearest(floor, &mut nearest, entered, |e| e.2);
                 }
             });
+            next = nearest.map(|(child, lanes, _)| (child, lanes));
         }
     }
 

@@ -101,16 +101,9 @@ impl Bvh8 {
             let floor = stack.len();
             let mut nearest: Option<(ChildRef, f32)> = None;
             for_lanes(hits, |k| {
+                self.prefetch_child::<COMPACT>(node.child[k], true);
                 let hit = (node.child[k], entries[k]);
-                self.prefetch_child::<COMPACT>(hit.0, true);
-                match nearest {
-                    Some(near) if hit.1 > near.1 => stack.push_sorted(floor, hit, |e| e.1),
-                    Some(near) => {
-                        stack.push_sorted(floor, near, |e| e.1);
-                        nearest = Some(hit);
-                    }
-                    None => nearest = Some(hit),
-                }
+                stack.push_sorted_but_nearest(floor, &mut nearest, hit, |e| e.1)
             });
             next = nearest.map(|near| near.0);
         }
