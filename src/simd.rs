@@ -262,21 +262,22 @@ pub fn table_halves(table: &[f32; TABLE]) -> (F32x8, F32x8) {
     (half(0), half(4))
 }
 
-/// Asks the cache for every line holding `value`, to be read soon: a hint, which changes
-/// no result.
+/// Asks the cache for every line of the `T` at `value`, to be read soon: a hint, which
+/// changes no result. The address need not be valid (nor in bounds: a walk asks without
+/// the bounds checks an index would cost), as a prefetch reads nothing and cannot fault.
 #[inline(always)]
-pub fn prefetch<T>(value: &T) {
+pub fn prefetch<T>(value: *const T) {
     #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch only hints the cache; it reads nothing and cannot fault, and
-    // every address lies within `value`.
+    // SAFETY: a prefetch only hints the cache; it reads nothing and cannot fault, at any
+    // address, and the addresses are made with wrapping arithmetic.
     unsafe {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        let (first, size) = ((value as *const T).cast::<i8>(), std::mem::size_of::<T>());
+        let (first, size) = (value.cast::<i8>(), std::mem::size_of::<T>());
         // An address every 64 bytes (a line), and the last byte, whose line they may miss.
         for at in (0..size).step_by(64) {
-            _mm_prefetch::<_MM_HINT_T0>(first.add(at));
+            _mm_prefetch::<_MM_HINT_T0>(first.wrapping_add(at));
         }
-        _mm_prefetch::<_MM_HINT_T0>(first.add(size.max(1) - 1));
+        _mm_prefetch::<_MM_HINT_T0>(first.wrapping_add(size.max(1) - 1));
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = value;

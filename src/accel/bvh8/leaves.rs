@@ -264,9 +264,9 @@ impl<K, P: PackOf<K>> Packs<K, P> {
     /// Asks the cache for pack `index`, and with `ids` for its primitives' ids too.
     #[inline(always)]
     fn prefetch(&self, index: usize, ids: bool) {
-        crate::simd::prefetch(&self.packs[index]);
+        crate::simd::prefetch(self.packs.as_ptr().wrapping_add(index));
         if ids {
-            crate::simd::prefetch(&self.ids[index]);
+            crate::simd::prefetch(self.ids.as_ptr().wrapping_add(index));
         }
     }
 

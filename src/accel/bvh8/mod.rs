@@ -153,7 +153,7 @@ impl Bvh8 {
         if child & LEAF != 0 {
             self.leaves.prefetch::<COMPACT>(child, closest);
         } else if self.nodes.len() > PREFETCHED_NODES {
-            crate::simd::prefetch(&self.nodes[child as usize]);
+            crate::simd::prefetch(self.nodes.as_ptr().wrapping_add(child as usize));
         }
     }
 
