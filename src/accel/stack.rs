@@ -57,10 +57,11 @@ impl<T: Copy, const N: usize> Stack<T, N> {
         self.len += 1;
     }
 
-    /// One of the items offered since the stack held `floor`: the one of the smallest
-    /// key so far (the later of equal keys) is kept in `nearest` rather than pushed, the
-    /// others pushed as [`Stack::push_sorted`] pushes. A walk enters `nearest` at once and
-    /// then the stack gives the others in the order it would have given them all.
+    /// Offers `item`, one of a node's children offered since the stack held `floor`: of
+    /// those offered so far, the one of the smallest key (the later of equal keys) is kept
+    /// in `nearest` rather than pushed, and the others are pushed as [`Stack::push_sorted`]
+    /// pushes them. A walk then enters `nearest` at once, and the stack gives the others
+    /// in the order it would have given them all.
     ///
     /// # Panics
     /// As [`Stack::push`].
