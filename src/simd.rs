@@ -273,11 +273,14 @@ pub fn prefetch<T>(value: *const T) {
     unsafe {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
         let (first, size) = (value.cast::<i8>(), std::mem::size_of::<T>());
-        // An address every 64 bytes (a line), and the last byte, whose line they may miss.
+        // An address every 64 bytes (a line), and the last byte, whose line they miss
+        // where `T` may start within a line.
         for at in (0..size).step_by(64) {
             _mm_prefetch::<_MM_HINT_T0>(first.wrapping_add(at));
         }
-        _mm_prefetch::<_MM_HINT_T0>(first.wrapping_add(size.max(1) - 1));
+        if !std::mem::align_of::<T>().is_multiple_of(64) {
+            _mm_prefetch::<_MM_HINT_T0>(first.wrapping_add(size.max(1) - 1));
+        }
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = value;

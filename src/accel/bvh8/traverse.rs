@@ -96,6 +96,12 @@ impl Bvh8 {
             count.node();
             count.boxes(node.count);
             let (hits, entries) = node.entries(&box_ray, t_min, closest.limit());
+            if hits & hits.wrapping_sub(1) == 0 {
+                // No child hit, or one, entered at once: nothing to sort or ask the cache
+                // for ahead of its reading.
+                next = (hits != 0).then(|| node.child[hits.trailing_zeros() as usize]);
+                continue;
+            }
             // The other hit children sorted on the stack, the nearest of them on top: the
             // order in which the stack gave them all when it held the nearest too.
             let floor = stack.len();
