@@ -349,6 +349,13 @@ fn add((min, max, count): Bin, bin: Bin) -> Bin {
     (min.min(bin.0), max.max(bin.1), count + bin.2)
 }
 
+/// The surface area of a bin's box, as [`Aabb::area`] computes it.
+#[inline(always)]
+fn bin_area((min, max, _): &Bin) -> f32 {
+    let e = (*max - *min).max(Vec3A::ZERO);
+    2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+}
+
 /// A bin's box.
 fn boxed((min, max, _): Bin) -> Aabb {
     Aabb {
@@ -426,8 +433,10 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
             },
         ),
     };
-    // (cost, axis, last bin on the left, the two sides' boxes)
-    let mut best: Option<(f32, usize, usize, Aabb, Aabb)> = None;
+    // (cost, axis, place of the last bin on the left among the axis's full bins)
+    let mut best: Option<(f32, usize, usize)> = None;
+    let mut full = [[0usize; BINS]; 3];
+    let mut full_count = [0usize; 3];
     for (axis, bins) in bins.iter().enumerate() {
         if !(extent[axis] > 0.0) {
             continue;
@@ -435,39 +444,48 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
         // The bins with items, left to right; everything right of each, swept from the
         // right: a split after an empty bin costs what the one before it did, and only
         // a cheaper one replaces the best.
-        let mut full = [0usize; BINS];
-        let mut m = 0;
+        let (full, m) = (&mut full[axis], &mut full_count[axis]);
         let mut bits = used[axis];
         while bits != 0 {
-            full[m] = bits.trailing_zeros() as usize;
+            full[*m] = bits.trailing_zeros() as usize;
             bits &= bits - 1;
-            m += 1;
+            *m += 1;
         }
-        let mut right = [(Aabb::EMPTY, 0usize); BINS];
+        let m = *m;
+        // Each split's right side: its area times its tests.
+        let mut right = [0.0f32; BINS];
         let mut acc = EMPTY_BIN;
         for j in (1..m).rev() {
             acc = add(acc, bins[full[j]]);
-            right[j] = (boxed(acc), acc.2);
+            right[j] = bin_area(&acc) * tests(acc.2);
         }
         let mut acc = EMPTY_BIN;
         for j in 0..m.saturating_sub(1) {
             acc = add(acc, bins[full[j]]);
-            let (left_box, (right_box, right_count)) = (boxed(acc), right[j + 1]);
-            let cost = TRAVERSAL_COST
-                + (left_box.area() * tests(acc.2) + right_box.area() * tests(right_count))
-                    / node_area;
-            if best.as_ref().is_none_or(|b| cost < b.0) {
-                best = Some((cost, axis, full[j], left_box, right_box));
+            let cost = TRAVERSAL_COST + (bin_area(&acc) * tests(acc.2) + right[j + 1]) / node_area;
+            if best.is_none_or(|b| cost < b.0) {
+                best = Some((cost, axis, j));
             }
         }
     }
-    let Some((cost, axis, last_left, left_bounds, right_bounds)) = best else {
+    let Some((cost, axis, j)) = best else {
         // Every centroid in one place: no plane separates them.
         return median_split(items, &centroids, MAX_LEAF).map(|k| Split::at(items, k));
     };
     if n <= MAX_LEAF && cost >= n as f32 {
         return None;
     }
+    // The two sides' boxes: the unions of their bins (minima and maxima are exact in any
+    // order).
+    let full = &full[axis][..full_count[axis]];
+    let side = |bins_of_side: &[usize]| {
+        boxed(
+            bins_of_side
+                .iter()
+                .fold(EMPTY_BIN, |acc, &i| add(acc, bins[axis][i])),
+        )
+    };
+    let (last_left, left_bounds, right_bounds) = (full[j], side(&full[..=j]), side(&full[j + 1..]));
     let (k, left, right) = match axis {
         0 => partition::<0>(items, low[0], scale[0], last_left),
         1 => partition::<1>(items, low[1], scale[1], last_left),
