@@ -15,8 +15,9 @@ use rayon::prelude::*;
 pub const MAX_LEAF: usize = 8;
 /// Leaves of the report's BVH hold at most this many objects.
 const MIDPOINT_LEAF: usize = 2;
-/// Bins per axis of the SAH sweep.
+/// Bins per axis of the SAH sweep: a power of two, for [`bin_of`]'s mask.
 const BINS: usize = 16;
+const _: () = assert!(BINS.is_power_of_two());
 /// Below this depth a build may split as it likes; deeper, it splits at the median so
 /// the depth stays under [`super::MAX_DEPTH`] whatever the input.
 const FREE_DEPTH: usize = 64;
@@ -403,36 +404,31 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
     let scale = BINS as f32 / Vec3A::from(extent);
     // Every axis's bins in one pass over the items; the boxes' unions are exact (an axis
     // without extent fills bins that are never read), so a large node's chunks are binned
-    // on rayon's threads and their bins merged. A bit a bin says it holds items.
+    // on rayon's threads and their bins merged.
     let binned = |items: &[Item]| {
         let mut bins = [[EMPTY_BIN; BINS]; 3];
-        let mut used = [0u32; 3];
         for it in items {
             let (min, max) = (Vec3A::from(it.bounds.min), Vec3A::from(it.bounds.max));
             let place = (it.centre() - low) * scale;
             for (axis, axis_bins) in bins.iter_mut().enumerate() {
                 let i = bin_of(place[axis]);
                 axis_bins[i] = add(axis_bins[i], (min, max, 1));
-                used[axis] |= 1 << i;
             }
         }
-        (bins, used)
+        bins
     };
-    let (bins, used) = match n > PARALLEL_BUILD && several_threads() {
+    let bins = match n > PARALLEL_BUILD && several_threads() {
         false => binned(items),
         true => items.par_chunks(PARALLEL_BUILD).map(binned).reduce(
-            || ([[EMPTY_BIN; BINS]; 3], [0; 3]),
-            |(a, used_a), (b, used_b)| {
-                let merged = std::array::from_fn(|axis| {
-                    std::array::from_fn(|i| add(a[axis][i], b[axis][i]))
-                });
-                (
-                    merged,
-                    std::array::from_fn(|axis| used_a[axis] | used_b[axis]),
-                )
-            },
+            || [[EMPTY_BIN; BINS]; 3],
+            |a, b| std::array::from_fn(|axis| std::array::from_fn(|i| add(a[axis][i], b[axis][i]))),
         ),
     };
+    // A bit a bin that holds items, a mask an axis: found once from the counts rather
+    // than set by every item.
+    let used = bins.map(|axis_bins| {
+        (axis_bins.iter().enumerate()).fold(0u32, |bits, (i, bin)| bits | ((bin.2 > 0) as u32) << i)
+    });
     // (cost, axis, place of the last bin on the left among the axis's full bins)
     let mut best: Option<(f32, usize, usize)> = None;
     let mut full = [[0usize; BINS]; 3];
@@ -511,7 +507,8 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
 fn bin_of(place: f32) -> usize {
     let clamped = place.max(0.0).min((BINS - 1) as f32);
     // SAFETY: `clamped` is a number in [0, BINS - 1], never NaN (`max` returns the number).
-    (unsafe { clamped.to_int_unchecked::<u32>() }) as usize
+    // The mask changes nothing, but tells the compiler the bin is in range.
+    (unsafe { clamped.to_int_unchecked::<u32>() }) as usize & (BINS - 1)
 }
 
 /// Moves the items whose bin on `AXIS` is at most `last_left` to the front, in one pass
