@@ -424,30 +424,25 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
             |a, b| std::array::from_fn(|axis| std::array::from_fn(|i| add(a[axis][i], b[axis][i]))),
         ),
     };
-    // A bit a bin that holds items, a mask an axis: found once from the counts rather
-    // than set by every item.
-    let used = bins.map(|axis_bins| {
-        (axis_bins.iter().enumerate()).fold(0u32, |bits, (i, bin)| bits | ((bin.2 > 0) as u32) << i)
+    // The bins that hold items, left to right, an axis: (their places, how many). Each
+    // place is written, and kept where its bin holds items.
+    let full = bins.each_ref().map(|axis_bins| {
+        let mut full = ([0usize; BINS], 0);
+        for (i, bin) in axis_bins.iter().enumerate() {
+            full.0[full.1] = i;
+            full.1 += (bin.2 > 0) as usize;
+        }
+        full
     });
     // (cost, axis, place of the last bin on the left among the axis's full bins)
     let mut best: Option<(f32, usize, usize)> = None;
-    let mut full = [[0usize; BINS]; 3];
-    let mut full_count = [0usize; 3];
     for (axis, bins) in bins.iter().enumerate() {
         if !(extent[axis] > 0.0) {
             continue;
         }
-        // The bins with items, left to right; everything right of each, swept from the
-        // right: a split after an empty bin costs what the one before it did, and only
-        // a cheaper one replaces the best.
-        let (full, m) = (&mut full[axis], &mut full_count[axis]);
-        let mut bits = used[axis];
-        while bits != 0 {
-            full[*m] = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            *m += 1;
-        }
-        let m = *m;
+        // Everything right of each full bin, swept from the right: a split after an empty
+        // bin costs what the one before it did, and only a cheaper one replaces the best.
+        let (full, m) = (&full[axis].0, full[axis].1);
         // Each split's right side: its area times its tests.
         let mut right = [0.0f32; BINS];
         let mut acc = EMPTY_BIN;
@@ -473,7 +468,7 @@ fn sah_split(items: &mut [Item], boxes: &Boxes, pack: usize) -> Option<Split> {
     }
     // The two sides' boxes: the unions of their bins (minima and maxima are exact in any
     // order).
-    let full = &full[axis][..full_count[axis]];
+    let full = &full[axis].0[..full[axis].1];
     let side = |bins_of_side: &[usize]| {
         boxed(
             bins_of_side
